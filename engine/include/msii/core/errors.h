@@ -1,0 +1,29 @@
+#pragma once
+/// @file errors.h
+/// @brief The exception hierarchy of msii. Tools catch these at main(), print one line
+/// ("msii: error: <what>") and exit non-zero.
+
+#include <stdexcept>
+#include <string>
+
+namespace msii {
+
+/// Base of all errors msii reports to the user; what() is one complete sentence.
+class Error : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// The input (a mesh, a parameter, a feature file) cannot be used as given.
+class InvalidInputError : public Error {
+public:
+    using Error::Error;
+};
+
+/// A file cannot be read or written.
+class IOError : public Error {
+public:
+    using Error::Error;
+};
+
+} // namespace msii

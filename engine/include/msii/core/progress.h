@@ -1,0 +1,42 @@
+#pragma once
+/// @file progress.h
+/// @brief Progress reporting for long stages, in the shape of OpenVDB's interrupter
+/// (start / update / end). Shown on a terminal (stderr is a TTY), silent in scripts.
+
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <string>
+
+namespace msii {
+
+/// A thread-safe progress line on stderr. Engine functions take a `Progress*` that may be
+/// null; they call start(), then update() from any thread, then end().
+class Progress {
+public:
+    /// @param enabled  false: never print. By default printing happens only when stderr is a
+    ///                 terminal, so pipelines and CI logs stay clean.
+    explicit Progress(bool enabled = stderrIsTerminal());
+    ~Progress();
+
+    void start(const std::string& stage, std::size_t total);
+    /// Add @p done units of work (thread-safe); redraws at most ~10 times per second.
+    void advance(std::size_t done = 1);
+    void end();
+
+    bool enabled() const { return mEnabled; }
+    static bool stderrIsTerminal();
+
+private:
+    void draw(bool final);
+
+    bool mEnabled;
+    std::string mStage;
+    std::size_t mTotal = 0;
+    std::atomic<std::size_t> mDone{0};
+    std::mutex mMutex;
+    std::chrono::steady_clock::time_point mStart, mLastDraw;
+    bool mActive = false;
+};
+
+} // namespace msii

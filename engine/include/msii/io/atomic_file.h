@@ -1,0 +1,41 @@
+#pragma once
+/// @file atomic_file.h
+/// @brief Output files appear whole or not at all: data goes to a temporary file in the
+/// target's folder, which is renamed over the target on commit() and removed otherwise.
+
+#include <cstdio>
+#include <string>
+
+namespace msii {
+
+class AtomicFile {
+public:
+    /// Opens "<dir>/.<name>.tmp-<pid>-<n>" for binary writing.
+    /// @throw IOError if the folder is missing or not writable.
+    explicit AtomicFile(const std::string& target);
+    ~AtomicFile();  ///< removes the temporary file unless committed
+    AtomicFile(const AtomicFile&) = delete;
+    AtomicFile& operator=(const AtomicFile&) = delete;
+
+    std::FILE* stream() { return mFile; }
+    void write(const void* data, std::size_t bytes);  ///< @throw IOError (e.g. disk full)
+    void write(const std::string& text) { write(text.data(), text.size()); }
+    /// Flushes, closes and renames onto the target. @throw IOError
+    void commit();
+
+    const std::string& target() const { return mTarget; }
+
+private:
+    std::string mTarget, mTemp;
+    std::FILE* mFile = nullptr;
+    bool mCommitted = false;
+};
+
+/// Checks up front that @p target can be created (folder exists and is writable; the
+/// target, if it exists, is a regular file). @throw IOError with the reason.
+void checkWritable(const std::string& target);
+
+/// Writes @p text to @p target atomically.
+void writeTextFileAtomic(const std::string& target, const std::string& text);
+
+} // namespace msii

@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Installs what msii needs from Debian's packages (only what is missing), then configures
+# and builds it (Release, two jobs). Used by tools/demo.sh and tools/test.sh.
+#   tools/setup.sh [--no-tests]
+# Environment: MSII_BUILD_DIR (default: build), MSII_JOBS (default: 2).
+set -euo pipefail
+
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build_dir="${MSII_BUILD_DIR:-$here/build}"
+jobs="${MSII_JOBS:-2}"
+with_tests=ON
+[ "${1:-}" = "--no-tests" ] && with_tests=OFF
+
+packages=(
+  build-essential cmake pkg-config
+  libopenvdb-dev libboost-iostreams-dev libblosc-dev
+  libopenmesh-dev libopenexr-dev libtbb-dev libpng-dev
+  libcli11-dev nlohmann-json3-dev
+  libgtest-dev
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "msii setup: installing ${missing[*]}"
+  if [ "$(id -u)" -eq 0 ]; then
+    sudo=()
+  elif command -v sudo >/dev/null 2>&1; then
+    sudo=(sudo)
+  else
+    echo "msii setup: error: need root or sudo to install: ${missing[*]}" >&2
+    exit 1
+  fi
+  export DEBIAN_FRONTEND=noninteractive
+  "${sudo[@]}" apt-get update -qq
+  "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+cmake -S "$here" -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DMSII_BUILD_TESTS="$with_tests" \
+  -DMSII_WARNINGS_AS_ERRORS="$([ "${CI:-}" = true ] && echo ON || echo OFF)" >/dev/null
+cmake --build "$build_dir" -j "$jobs"
