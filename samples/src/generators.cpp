@@ -1,1 +1,900 @@
-// stub: to be implemented
+/// @file generators.cpp
+/// @brief Sample meshes: jittered lattices with random diagonals (height fields, cube
+/// faces), a jittered geodesic sphere, and the analytic height functions. See generators.h
+/// for the spacing / vertex-count relations and the determinism contract.
+
+#include <msii/samples/generators.h>
+
+#include <msii/core/errors.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+namespace msii::samples {
+
+namespace {
+
+// ---------------------------------------------------------------------------------------
+// Tunables
+// ---------------------------------------------------------------------------------------
+
+/// Maximum jitter, in lattice steps. A triangle of a square lattice has heights >= step/sqrt(2);
+/// moving each vertex by at most r changes a height by at most 2r, so r < 0.354 keeps all
+/// triangles non-degenerate and correctly oriented (the equilateral sphere lattice allows
+/// r < 0.433).
+constexpr double kJitter = 0.25;
+/// Probability that a quad takes its shorter diagonal.
+constexpr double kShortDiagonalProbability = 0.9;
+/// Guard against absurd requests (memory, 32-bit indices).
+constexpr double kMaxVertices = 200e6;
+/// Value-noise wavelength, in spacings.
+constexpr double kNoiseWavelength = 5.0;
+/// Tablet: wedge creases are rounded over min(spacing, this), mm.
+constexpr double kMaxBlendLength = 0.1;
+constexpr double kPi = 3.14159265358979323846;
+
+/// Independent random streams: every random quantity is hash(seed, stream, key...).
+enum Stream : std::uint64_t {
+    kStreamJitter = 1,
+    kStreamDiagonal,
+    kStreamBottomJitter,
+    kStreamBottomDiagonal,
+    kStreamWallJitter,
+    kStreamWallDiagonal,
+    kStreamCubeDiagonal,  // + face number
+    kStreamHills = 16,
+    kStreamWedges,
+    kStreamNoise,
+};
+
+// ---------------------------------------------------------------------------------------
+// Deterministic randomness
+// ---------------------------------------------------------------------------------------
+
+/// The splitmix64 output function: a bijective avalanche mix of 64 bits.
+constexpr std::uint64_t mix64(std::uint64_t z)
+{
+    z += 0x9e3779b97f4a7c15ULL;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+}
+
+/// Counter-based random bits for (seed, stream, a, b): the same key gives the same bits
+/// wherever and in whatever order it is evaluated, so parallel loops stay deterministic.
+constexpr std::uint64_t hashKey(std::uint64_t seed, std::uint64_t stream, std::uint64_t a,
+                                std::uint64_t b = 0)
+{
+    return mix64(mix64(mix64(mix64(seed) ^ stream) ^ a) ^ b);
+}
+
+/// Uniform in [0, 1) from the top 53 bits.
+constexpr double unitInterval(std::uint64_t bits) { return double(bits >> 11) * 0x1.0p-53; }
+
+/// Uniform in [-1, 1).
+constexpr double signedUnit(std::uint64_t bits) { return 2.0 * unitInterval(bits) - 1.0; }
+
+/// Uniform in the closed unit disc, by rejection from the square (accepts with p = pi/4).
+std::array<double, 2> unitDiscPoint(std::uint64_t key)
+{
+    for (std::uint64_t attempt = 0;; ++attempt) {
+        const std::uint64_t h = mix64(key + attempt * 0xd1b54a32d192ed03ULL);
+        const double u = double(h >> 40) * 0x1.0p-23 - 1.0;               // 24 bits
+        const double v = double((h >> 8) & 0xffffffULL) * 0x1.0p-23 - 1.0;  // 24 bits
+        if (u * u + v * v <= 1.0) return {u, v};
+    }
+}
+
+/// Sequential generator for the few global layout choices (hills, wedges).
+class SplitMix64 {
+public:
+    explicit SplitMix64(std::uint64_t seed) : mState(seed) {}
+    std::uint64_t next()
+    {
+        const std::uint64_t out = mix64(mState);
+        mState += 0x9e3779b97f4a7c15ULL;
+        return out;
+    }
+    double uniform() { return unitInterval(next()); }
+    double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
+    /// A random unit vector in the plane (uniform direction).
+    std::array<double, 2> direction()
+    {
+        for (;;) {
+            const double u = 2.0 * uniform() - 1.0, v = 2.0 * uniform() - 1.0;
+            const double r2 = u * u + v * v;
+            if (r2 <= 1.0 && r2 >= 1e-4) {
+                const double r = std::sqrt(r2);
+                return {u / r, v / r};
+            }
+        }
+    }
+
+private:
+    std::uint64_t mState;
+};
+
+// ---------------------------------------------------------------------------------------
+// Validation and lattice helpers
+// ---------------------------------------------------------------------------------------
+
+/// Shortest readable form of a number for messages ("0.01", not "0.010000").
+std::string formatNumber(double value)
+{
+    std::ostringstream out;
+    out << std::setprecision(6) << value;
+    return out.str();
+}
+
+void requirePositive(double value, const char* what)
+{
+    if (!(std::isfinite(value) && value > 0.0))
+        throw InvalidInputError(std::string("sample mesh: ") + what +
+                                " must be a positive finite number (got " + formatNumber(value) + ").");
+}
+
+void requireNonNegative(double value, const char* what)
+{
+    if (!(std::isfinite(value) && value >= 0.0))
+        throw InvalidInputError(std::string("sample mesh: ") + what +
+                                " must be a finite number >= 0 (got " + formatNumber(value) + ").");
+}
+
+/// Number of lattice cells along an extent, round(extent / spacing), at least 1.
+int latticeCells(double extent, double spacing)
+{
+    const double cells = std::round(extent / spacing);
+    if (!(cells <= kMaxVertices))
+        throw InvalidInputError("sample mesh: spacing " + formatNumber(spacing) +
+                                " is far too fine for a size of " + formatNumber(extent) + ".");
+    return std::max(1, int(cells));
+}
+
+void requireVertexCount(double count)
+{
+    if (count > kMaxVertices)
+        throw InvalidInputError("sample mesh: " + formatNumber(count) +
+                                " vertices requested (limit 200 million); increase the spacing.");
+}
+
+/// Coordinate of lattice line i of n over [0, extent]; the last line is exactly extent.
+double latticeCoord(int i, int n, double extent) { return i == n ? extent : extent * i / n; }
+
+/// Triangulates the quads of an (nu + 1) x (nv + 1) vertex grid, two triangles per quad at
+/// out[2 q], out[2 q + 1] with q = j * nu + i; index(i, j) gives a grid vertex. Triangles
+/// are counter-clockwise in (i, j) (reversed if flip). Each quad takes its shorter diagonal
+/// (in 3D) with probability kShortDiagonalProbability, decided by hash(seed, stream, q).
+template <class IndexFn>
+void triangulateGrid(const std::vector<Vec3>& points, int nu, int nv, const IndexFn& index,
+                     std::uint64_t seed, std::uint64_t stream, bool flip, Triangle* out)
+{
+    tbb::parallel_for(tbb::blocked_range<int>(0, nv), [&](const tbb::blocked_range<int>& rows) {
+        for (int j = rows.begin(); j != rows.end(); ++j) {
+            for (int i = 0; i < nu; ++i) {
+                const std::size_t q = std::size_t(j) * std::size_t(nu) + std::size_t(i);
+                const std::uint32_t a = index(i, j), b = index(i + 1, j), c = index(i + 1, j + 1),
+                                    d = index(i, j + 1);
+                const bool acShorter = squaredNorm(points[c] - points[a]) <= squaredNorm(points[d] - points[b]);
+                const bool preferShort = unitInterval(hashKey(seed, stream, q)) < kShortDiagonalProbability;
+                Triangle t0, t1;
+                if (acShorter == preferShort) {
+                    t0 = {a, b, c};
+                    t1 = {a, c, d};
+                } else {
+                    t0 = {a, b, d};
+                    t1 = {b, c, d};
+                }
+                if (flip) {
+                    std::swap(t0[1], t0[2]);
+                    std::swap(t1[1], t1[2]);
+                }
+                out[2 * q] = t0;
+                out[2 * q + 1] = t1;
+            }
+        }
+    });
+}
+
+// ---------------------------------------------------------------------------------------
+// Smooth min / max (quadratic polynomial blend, C1): equal to min / max when |a - b| >= k,
+// so far-away features contribute exactly nothing.
+// ---------------------------------------------------------------------------------------
+
+double smoothMin(double a, double b, double k)
+{
+    const double h = std::max(k - std::abs(a - b), 0.0) / k;
+    return std::min(a, b) - 0.25 * h * h * k;
+}
+
+double smoothMax(double a, double b, double k)
+{
+    const double h = std::max(k - std::abs(a - b), 0.0) / k;
+    return std::max(a, b) + 0.25 * h * h * k;
+}
+
+// ---------------------------------------------------------------------------------------
+// Height functions
+// ---------------------------------------------------------------------------------------
+
+struct Box {
+    double xmin, xmax, ymin, ymax;
+    bool contains(double x, double y) const { return x >= xmin && x <= xmax && y >= ymin && y <= ymax; }
+};
+
+/// A uniform grid of buckets over a rectangle listing, per cell, the items whose box
+/// overlaps it, in increasing item order (so sums and blends run in a fixed order).
+/// Queries outside the rectangle use the nearest cell, which is still correct: box ranges
+/// are clamped the same way.
+class BucketGrid {
+public:
+    BucketGrid() = default;
+    BucketGrid(const Box& domain, double cell, const std::vector<Box>& boxes)
+        : mX0(domain.xmin), mY0(domain.ymin), mCell(cell)
+    {
+        mNx = std::clamp(int(std::ceil((domain.xmax - domain.xmin) / cell)), 1, 4096);
+        mNy = std::clamp(int(std::ceil((domain.ymax - domain.ymin) / cell)), 1, 4096);
+        std::vector<std::vector<std::uint32_t>> cells(std::size_t(mNx) * std::size_t(mNy));
+        for (std::size_t n = 0; n < boxes.size(); ++n) {
+            const int i0 = cellX(boxes[n].xmin), i1 = cellX(boxes[n].xmax);
+            const int j0 = cellY(boxes[n].ymin), j1 = cellY(boxes[n].ymax);
+            for (int j = j0; j <= j1; ++j)
+                for (int i = i0; i <= i1; ++i) cells[std::size_t(j) * mNx + i].push_back(std::uint32_t(n));
+        }
+        mStart.assign(cells.size() + 1, 0);
+        for (std::size_t c = 0; c < cells.size(); ++c) mStart[c + 1] = mStart[c] + std::uint32_t(cells[c].size());
+        mItems.reserve(mStart.back());
+        for (const auto& list : cells) mItems.insert(mItems.end(), list.begin(), list.end());
+    }
+
+    /// Items whose box may contain (x, y), as a [begin, end) range of indices.
+    std::pair<const std::uint32_t*, const std::uint32_t*> query(double x, double y) const
+    {
+        if (mItems.empty()) return {nullptr, nullptr};
+        const std::size_t c = std::size_t(cellY(y)) * mNx + cellX(x);
+        return {mItems.data() + mStart[c], mItems.data() + mStart[c + 1]};
+    }
+
+private:
+    int cellX(double x) const { return clampCell((x - mX0) / mCell, mNx); }
+    int cellY(double y) const { return clampCell((y - mY0) / mCell, mNy); }
+    static int clampCell(double t, int n)
+    {
+        if (!(t > 0.0)) return 0;  // also NaN
+        return t >= double(n - 1) ? n - 1 : int(t);
+    }
+
+    double mX0 = 0, mY0 = 0, mCell = 1;
+    int mNx = 1, mNy = 1;
+    std::vector<std::uint32_t> mStart, mItems;
+};
+
+/// A Gaussian-like hill a (1 - r^2 / R^2)^4 for r < R, 0 beyond: within 3 % of a Gaussian
+/// of sigma = R / 3, but with compact support and without exp().
+struct Hill {
+    double cx, cy, radius, amplitude;
+};
+
+/// A cuneiform wedge: the pit a triangular pyramid (stylus corner) leaves in the clay. Its
+/// outline is a long isosceles triangle (head edge across the stroke, apex at the end of
+/// the tail); the deepest point lies on the axis near the head. The pit is the max of the
+/// three planes through an outline edge and the deepest point (the convex piecewise-linear
+/// pyramid), blended by smoothMax / smoothMin over `blend` (height units).
+struct Wedge {
+    std::array<std::array<double, 3>, 3> planes;  ///< a x + b y + c, 0 on an outline edge
+    double blend;
+    Box reach;  ///< outside it the pit function is >= blend, i.e. exactly no effect
+};
+
+class HeightFunction {
+public:
+    explicit HeightFunction(const HeightFieldOptions& options);
+    double operator()(double x, double y) const;
+
+private:
+    double hills(double x, double y) const;
+    double wedges(double x, double y) const;
+    double valueNoise(double x, double y) const;
+
+    HeightFieldKind mKind;
+    std::uint64_t mSeed;
+    double mCx = 0, mCy = 0, mCurvature = 0;
+    double mNoise = 0, mNoiseFrequency = 1;
+    std::vector<Hill> mHills;
+    std::vector<Wedge> mWedges;
+    BucketGrid mGrid;
+};
+
+void validate(const HeightFieldOptions& o)
+{
+    requirePositive(o.width, "width");
+    requirePositive(o.height, "height");
+    requirePositive(o.spacing, "spacing");
+    if (o.closed) requirePositive(o.thickness, "thickness");
+    if (o.kind == HeightFieldKind::Terrain) {
+        if (!std::isfinite(o.relief)) throw InvalidInputError("sample mesh: relief must be finite.");
+        requirePositive(o.hillWidth, "hill width");
+        requireNonNegative(o.noise, "noise");
+    }
+    if (o.kind == HeightFieldKind::Tablet) {
+        if (!std::isfinite(o.sag)) throw InvalidInputError("sample mesh: sag must be finite.");
+        requireNonNegative(o.wedgeDensity, "wedge density");
+        requireNonNegative(o.wedgeMargin, "wedge margin");
+        if (o.wedgeDensity > 0.0) requirePositive(o.wedgeSize, "wedge size");
+        requireNonNegative(o.noise, "noise");
+    }
+}
+
+HeightFunction::HeightFunction(const HeightFieldOptions& o) : mKind(o.kind), mSeed(o.seed)
+{
+    validate(o);
+    if (mKind == HeightFieldKind::Plane) return;
+    mNoise = o.noise;
+    mNoiseFrequency = 1.0 / (kNoiseWavelength * o.spacing);
+
+    std::vector<Box> boxes;
+    if (mKind == HeightFieldKind::Terrain) {
+        // Hill centres cover the rectangle grown by the largest support radius, so the
+        // border looks like the inside. Amplitudes are uniform in [-relief, relief]; with
+        // density 0.75 / (pi sigma^2) the standard deviation of the sum is ~relief / 2.
+        SplitMix64 rng(hashKey(o.seed, kStreamHills, 0));
+        const double maxRadius = 3.0 * 1.4 * o.hillWidth;
+        const double area = (o.width + 2 * maxRadius) * (o.height + 2 * maxRadius);
+        const double count = std::round(0.75 * area / (kPi * o.hillWidth * o.hillWidth));
+        if (count > 1e6) throw InvalidInputError("sample mesh: hill width too small for the terrain size.");
+        for (int n = 0; n < int(count); ++n) {
+            Hill hill;
+            hill.cx = rng.uniform(-maxRadius, o.width + maxRadius);
+            hill.cy = rng.uniform(-maxRadius, o.height + maxRadius);
+            hill.radius = 3.0 * o.hillWidth * rng.uniform(0.6, 1.4);
+            hill.amplitude = o.relief * rng.uniform(-1.0, 1.0);
+            mHills.push_back(hill);
+            boxes.push_back({hill.cx - hill.radius, hill.cx + hill.radius, hill.cy - hill.radius,
+                             hill.cy + hill.radius});
+        }
+        mGrid = BucketGrid({-maxRadius, o.width + maxRadius, -maxRadius, o.height + maxRadius},
+                           2.0 * o.hillWidth, boxes);
+        return;
+    }
+
+    // Tablet: z = -c ((x - xc)^2 + (y - yc)^2), c from the sag at the middle of the longer side.
+    mCx = 0.5 * o.width;
+    mCy = 0.5 * o.height;
+    const double halfLong = 0.5 * std::max(o.width, o.height);
+    mCurvature = o.sag / (halfLong * halfLong);
+
+    const double m = o.wedgeMargin;
+    const double innerW = o.width - 2 * m, innerH = o.height - 2 * m;
+    if (o.wedgeDensity <= 0.0 || innerW <= 0.0 || innerH <= 0.0) return;
+    const double count = std::round(o.wedgeDensity * innerW * innerH);
+    if (count > 1e6) throw InvalidInputError("sample mesh: too many wedges requested (over a million).");
+
+    // The layout uses only the sizes and the seed (not the spacing), so one tablet can be
+    // sampled at several resolutions. Wedges that do not fit inside the margin after 100
+    // attempts are dropped (small tablets).
+    SplitMix64 rng(hashKey(o.seed, kStreamWedges, 0));
+    for (int n = 0; n < int(count); ++n) {
+        for (int attempt = 0; attempt < 100; ++attempt) {
+            const double length = o.wedgeSize * rng.uniform(0.6, 1.4);
+            const double headWidth = length * rng.uniform(0.35, 0.5);
+            const double deepAt = length * rng.uniform(0.2, 0.3);
+            const double depth = 0.2 * length;
+            const auto dir = rng.direction();
+            const double hx = rng.uniform(m, o.width - m), hy = rng.uniform(m, o.height - m);
+            const double px = -dir[1], py = dir[0];  // across the stroke
+            const std::array<std::array<double, 2>, 3> corner = {{
+                {hx + 0.5 * headWidth * px, hy + 0.5 * headWidth * py},
+                {hx - 0.5 * headWidth * px, hy - 0.5 * headWidth * py},
+                {hx + length * dir[0], hy + length * dir[1]},
+            }};
+            const double qx = hx + deepAt * dir[0], qy = hy + deepAt * dir[1];
+            Wedge w;
+            double minSlope = std::numeric_limits<double>::infinity();
+            for (int e = 0; e < 3; ++e) {
+                // Plane through edge (p1, p2) at height 0 and through Q at -depth.
+                const auto& p1 = corner[e];
+                const auto& p2 = corner[(e + 1) % 3];
+                const double ex = p2[0] - p1[0], ey = p2[1] - p1[1];
+                const double s = ex * (qy - p1[1]) - ey * (qx - p1[0]);  // 2D cross, signed
+                const double a = depth * ey / s, b = -depth * ex / s;
+                w.planes[e] = {a, b, -(a * p1[0] + b * p1[1])};
+                minSlope = std::min(minSlope, std::sqrt(a * a + b * b));
+            }
+            // Smallest half-angle of the outline (the tail apex): beyond a corner the pit
+            // function rises at least at minSlope * sin(angle / 2) per unit of distance.
+            double minSinHalf = 1.0;
+            for (int v = 0; v < 3; ++v) {
+                const auto& p = corner[v];
+                const auto& p1 = corner[(v + 1) % 3];
+                const auto& p2 = corner[(v + 2) % 3];
+                const double ux = p1[0] - p[0], uy = p1[1] - p[1], vx = p2[0] - p[0], vy = p2[1] - p[1];
+                const double cosAngle = (ux * vx + uy * vy) / std::sqrt((ux * ux + uy * uy) * (vx * vx + vy * vy));
+                minSinHalf = std::min(minSinHalf, std::sqrt(std::max(0.0, 0.5 * (1.0 - cosAngle))));
+            }
+            // The blend (creases rounded over ~1 spacing, at most kMaxBlendLength) reaches at
+            // most blendLength / minSinHalf beyond the outline; keep that inside the margin
+            // for the largest blend, so the layout does not depend on the spacing.
+            const double maxReach = 1.01 * kMaxBlendLength / minSinHalf;
+            const bool inside = std::all_of(corner.begin(), corner.end(), [&](const std::array<double, 2>& c) {
+                return c[0] - maxReach >= m && c[0] + maxReach <= o.width - m && c[1] - maxReach >= m &&
+                       c[1] + maxReach <= o.height - m;
+            });
+            if (!inside) continue;
+            const double blendLength = std::min(o.spacing, kMaxBlendLength);
+            w.blend = blendLength * minSlope;
+            const double reach = 1.01 * blendLength / minSinHalf;
+            w.reach = {std::min({corner[0][0], corner[1][0], corner[2][0]}) - reach,
+                       std::max({corner[0][0], corner[1][0], corner[2][0]}) + reach,
+                       std::min({corner[0][1], corner[1][1], corner[2][1]}) - reach,
+                       std::max({corner[0][1], corner[1][1], corner[2][1]}) + reach};
+            mWedges.push_back(w);
+            boxes.push_back(w.reach);
+            break;
+        }
+    }
+    mGrid = BucketGrid({0.0, o.width, 0.0, o.height}, std::max(2.0 * o.wedgeSize, 0.25), boxes);
+}
+
+double HeightFunction::operator()(double x, double y) const
+{
+    switch (mKind) {
+    case HeightFieldKind::Plane:
+        return 0.0;
+    case HeightFieldKind::Terrain:
+        return hills(x, y) + mNoise * valueNoise(x, y);
+    case HeightFieldKind::Tablet:
+        break;
+    }
+    const double dx = x - mCx, dy = y - mCy;
+    return -mCurvature * (dx * dx + dy * dy) + wedges(x, y) + mNoise * valueNoise(x, y);
+}
+
+double HeightFunction::hills(double x, double y) const
+{
+    double z = 0.0;
+    const auto [begin, end] = mGrid.query(x, y);
+    for (const std::uint32_t* it = begin; it != end; ++it) {
+        const Hill& h = mHills[*it];
+        const double dx = x - h.cx, dy = y - h.cy;
+        const double t = (dx * dx + dy * dy) / (h.radius * h.radius);
+        if (t < 1.0) {
+            const double u = (1.0 - t) * (1.0 - t);
+            z += h.amplitude * u * u;
+        }
+    }
+    return z;
+}
+
+double HeightFunction::wedges(double x, double y) const
+{
+    double z = 0.0;  // the undisturbed surface; pits are negative
+    const auto [begin, end] = mGrid.query(x, y);
+    for (const std::uint32_t* it = begin; it != end; ++it) {
+        const Wedge& w = mWedges[*it];
+        if (!w.reach.contains(x, y)) continue;
+        const auto plane = [&](int e) { return w.planes[e][0] * x + w.planes[e][1] * y + w.planes[e][2]; };
+        const double pit = smoothMax(smoothMax(plane(0), plane(1), w.blend), plane(2), w.blend);
+        z = smoothMin(z, pit, w.blend);
+    }
+    return z;
+}
+
+/// Value noise in [-1, 1]: seeded lattice values, quintic (C2) interpolation.
+double HeightFunction::valueNoise(double x, double y) const
+{
+    if (mNoise == 0.0) return 0.0;
+    const double fx = x * mNoiseFrequency, fy = y * mNoiseFrequency;
+    const double ix = std::floor(fx), iy = std::floor(fy);
+    const double tx = fx - ix, ty = fy - iy;
+    const auto fade = [](double t) { return t * t * t * (t * (t * 6.0 - 15.0) + 10.0); };
+    const auto value = [&](double i, double j) {
+        return signedUnit(hashKey(mSeed, kStreamNoise, std::uint64_t(std::int64_t(i)), std::uint64_t(std::int64_t(j))));
+    };
+    const double sx = fade(tx), sy = fade(ty);
+    const double v0 = value(ix, iy) + sx * (value(ix + 1, iy) - value(ix, iy));
+    const double v1 = value(ix, iy + 1) + sx * (value(ix + 1, iy + 1) - value(ix, iy + 1));
+    return v0 + sy * (v1 - v0);
+}
+
+// ---------------------------------------------------------------------------------------
+// Icosahedron
+// ---------------------------------------------------------------------------------------
+
+struct Icosahedron {
+    std::array<Vec3, 12> vertices;
+    std::vector<std::array<int, 3>> faces;  ///< counter-clockwise seen from outside
+};
+
+Icosahedron makeIcosahedron()
+{
+    const double phi = 0.5 * (1.0 + std::sqrt(5.0));
+    Icosahedron ico;
+    int n = 0;
+    for (double s : {-1.0, 1.0})
+        for (double t : {-1.0, 1.0}) {
+            ico.vertices[n++] = {0.0, s, t * phi};
+            ico.vertices[n++] = {s, t * phi, 0.0};
+            ico.vertices[n++] = {t * phi, 0.0, s};
+        }
+    // Faces are the triples of mutually adjacent vertices (edge length 2).
+    const auto adjacent = [&](int a, int b) {
+        return std::abs(squaredNorm(ico.vertices[a] - ico.vertices[b]) - 4.0) < 1e-9;
+    };
+    for (int a = 0; a < 12; ++a)
+        for (int b = a + 1; b < 12; ++b)
+            for (int c = b + 1; c < 12; ++c)
+                if (adjacent(a, b) && adjacent(b, c) && adjacent(a, c)) {
+                    const Vec3& A = ico.vertices[a];
+                    if (dot(cross(ico.vertices[b] - A, ico.vertices[c] - A), A) > 0)
+                        ico.faces.push_back({a, b, c});
+                    else
+                        ico.faces.push_back({a, c, b});
+                }
+    return ico;
+}
+
+} // namespace
+
+// ---------------------------------------------------------------------------------------
+// Sphere
+// ---------------------------------------------------------------------------------------
+
+TriMesh makeSphere(const SphereOptions& options)
+{
+    requirePositive(options.radius, "radius");
+    requirePositive(options.spacing, "spacing");
+    if (!(std::isfinite(options.center.x) && std::isfinite(options.center.y) && std::isfinite(options.center.z)))
+        throw InvalidInputError("sample mesh: the sphere centre must be finite.");
+    // 10 k^2 + 2 vertices on 4 pi R^2: k = sqrt(0.4 pi) R / spacing gives ~spacing^2 per vertex.
+    const double kReal = std::round(std::sqrt(0.4 * kPi) * options.radius / options.spacing);
+    requireVertexCount(10.0 * kReal * kReal + 2.0);
+    const int k = std::max(1, int(kReal));
+
+    const Icosahedron ico = makeIcosahedron();
+    // Edges (a < b) in first-seen order.
+    std::vector<std::array<int, 2>> edges;
+    std::unordered_map<int, int> edgeIds;  // key a * 12 + b
+    for (const auto& f : ico.faces)
+        for (int e = 0; e < 3; ++e) {
+            const int a = std::min(f[e], f[(e + 1) % 3]), b = std::max(f[e], f[(e + 1) % 3]);
+            if (edgeIds.emplace(a * 12 + b, int(edges.size())).second) edges.push_back({a, b});
+        }
+
+    const std::size_t perEdge = std::size_t(k - 1);
+    const std::size_t perFace = std::size_t(k - 1) * std::size_t(std::max(k - 2, 0)) / 2;
+    const std::size_t edgeBase = 12, faceBase = edgeBase + edges.size() * perEdge;
+    const std::size_t numVertices = faceBase + ico.faces.size() * perFace;
+
+    // Vertex id of lattice point (i, j) of face f (point A + (B - A) i / k + (C - A) j / k).
+    const auto edgePoint = [&](int u, int v, int t) -> std::uint32_t {
+        const int e = edgeIds.at(std::min(u, v) * 12 + std::max(u, v));
+        const int tt = u < v ? t : k - t;  // measured from the lower-numbered vertex
+        return std::uint32_t(edgeBase + std::size_t(e) * perEdge + std::size_t(tt - 1));
+    };
+    const auto pointId = [&](std::size_t f, int i, int j) -> std::uint32_t {
+        const auto& F = ico.faces[f];
+        if (i == 0 && j == 0) return std::uint32_t(F[0]);
+        if (i == k && j == 0) return std::uint32_t(F[1]);
+        if (i == 0 && j == k) return std::uint32_t(F[2]);
+        if (j == 0) return edgePoint(F[0], F[1], i);
+        if (i == 0) return edgePoint(F[0], F[2], j);
+        if (i + j == k) return edgePoint(F[1], F[2], j);
+        // Interior: row j has k - 1 - j points (i = 1 .. k - 1 - j), rows j = 1 .. k - 2.
+        const std::size_t before = std::size_t(j - 1) * std::size_t(k - 1) - std::size_t(j - 1) * std::size_t(j) / 2;
+        return std::uint32_t(faceBase + f * perFace + before + std::size_t(i - 1));
+    };
+
+    // Positions on the flat icosahedron (jittered in its faces / along its edges), then
+    // projected centrally onto the sphere: central projection keeps every triangle's
+    // orientation (det(p1, p2, p3) keeps its sign under positive scaling), so validity on
+    // the flat lattice carries over.
+    TriMesh mesh;
+    mesh.points.resize(numVertices);
+    const Vec3 c = options.center;
+    const double R = options.radius;
+    const auto project = [&](const Vec3& p) {
+        const Vec3 u = p / norm(p);
+        return Vec3{c.x + R * u.x, c.y + R * u.y, c.z + R * u.z};
+    };
+    const std::uint64_t seed = options.seed;
+    for (int v = 0; v < 12; ++v) mesh.points[std::size_t(v)] = project(ico.vertices[std::size_t(v)]);
+    tbb::parallel_for(std::size_t(0), edges.size(), [&](std::size_t e) {
+        const Vec3& A = ico.vertices[std::size_t(edges[e][0])];
+        const Vec3 AB = ico.vertices[std::size_t(edges[e][1])] - A;
+        for (int t = 1; t < k; ++t) {
+            const std::size_t id = edgeBase + e * perEdge + std::size_t(t - 1);
+            const double s = (t + kJitter * signedUnit(hashKey(seed, kStreamJitter, id))) / k;
+            mesh.points[id] = project(A + AB * s);
+        }
+    });
+    tbb::parallel_for(std::size_t(0), ico.faces.size(), [&](std::size_t f) {
+        const auto& F = ico.faces[f];
+        const Vec3& A = ico.vertices[std::size_t(F[0])];
+        const Vec3 AB = ico.vertices[std::size_t(F[1])] - A, AC = ico.vertices[std::size_t(F[2])] - A;
+        const double step = norm(AB) / k;
+        const Vec3 e1 = normalized(AB);
+        const Vec3 e2 = normalized(AC - e1 * dot(AC, e1));
+        for (int j = 1; j + 1 < k; ++j)
+            for (int i = 1; i + j < k; ++i) {
+                const std::uint32_t id = pointId(f, i, j);
+                const auto d = unitDiscPoint(hashKey(seed, kStreamJitter, id));
+                const Vec3 p = A + AB * (double(i) / k) + AC * (double(j) / k) +
+                               (e1 * d[0] + e2 * d[1]) * (kJitter * step);
+                mesh.points[id] = project(p);
+            }
+    });
+
+    // k^2 triangles per face: "up" (i, j), (i+1, j), (i, j+1) and "down" (i+1, j),
+    // (i+1, j+1), (i, j+1), both counter-clockwise like (A, B, C).
+    mesh.triangles.resize(ico.faces.size() * std::size_t(k) * std::size_t(k));
+    tbb::parallel_for(std::size_t(0), ico.faces.size(), [&](std::size_t f) {
+        std::size_t t = f * std::size_t(k) * std::size_t(k);
+        for (int j = 0; j < k; ++j)
+            for (int i = 0; i + j < k; ++i) {
+                mesh.triangles[t++] = {pointId(f, i, j), pointId(f, i + 1, j), pointId(f, i, j + 1)};
+                if (i + j + 1 < k)
+                    mesh.triangles[t++] = {pointId(f, i + 1, j), pointId(f, i + 1, j + 1), pointId(f, i, j + 1)};
+            }
+    });
+    if (options.cavity)
+        for (Triangle& t : mesh.triangles) std::swap(t[1], t[2]);
+    return mesh;
+}
+
+// ---------------------------------------------------------------------------------------
+// Cube
+// ---------------------------------------------------------------------------------------
+
+TriMesh makeCube(const CubeOptions& options)
+{
+    requirePositive(options.side, "side");
+    requirePositive(options.spacing, "spacing");
+    const int n = latticeCells(options.side, options.spacing);
+    requireVertexCount(6.0 * double(n) * double(n) + 2.0);
+    const double side = options.side;
+
+    // Faces as origin + i U + j V on the integer lattice {0..n}^3, U x V = outward normal.
+    struct Face {
+        std::array<int, 3> origin, u, v;
+    };
+    const std::array<Face, 6> faces = {{
+        {{0, 0, 0}, {0, 1, 0}, {1, 0, 0}},  // z = 0, normal -z
+        {{0, 0, n}, {1, 0, 0}, {0, 1, 0}},  // z = side, +z
+        {{0, 0, 0}, {0, 0, 1}, {0, 1, 0}},  // x = 0, -x
+        {{n, 0, 0}, {0, 1, 0}, {0, 0, 1}},  // x = side, +x
+        {{0, 0, 0}, {1, 0, 0}, {0, 0, 1}},  // y = 0, -y
+        {{0, n, 0}, {0, 0, 1}, {1, 0, 0}},  // y = side, +y
+    }};
+
+    // Vertex ids: face by face, row by row; vertices on cube edges are shared through a
+    // map keyed by their lattice position.
+    const std::size_t gridSize = std::size_t(n + 1) * std::size_t(n + 1);
+    std::vector<std::uint32_t> grid(6 * gridSize);
+    std::vector<std::array<int, 3>> lattice;  // lattice position of each vertex
+    lattice.reserve(6 * std::size_t(n) * std::size_t(n) + 2);
+    std::unordered_map<std::uint64_t, std::uint32_t> shared;
+    const auto key = [n](const std::array<int, 3>& p) {
+        return (std::uint64_t(p[0]) * std::uint64_t(n + 1) + std::uint64_t(p[1])) * std::uint64_t(n + 1) +
+               std::uint64_t(p[2]);
+    };
+    for (int f = 0; f < 6; ++f) {
+        const Face& F = faces[std::size_t(f)];
+        for (int j = 0; j <= n; ++j)
+            for (int i = 0; i <= n; ++i) {
+                const std::array<int, 3> p = {F.origin[0] + i * F.u[0] + j * F.v[0],
+                                              F.origin[1] + i * F.u[1] + j * F.v[1],
+                                              F.origin[2] + i * F.u[2] + j * F.v[2]};
+                std::uint32_t id;
+                if (i == 0 || j == 0 || i == n || j == n) {
+                    const auto [it, inserted] = shared.emplace(key(p), std::uint32_t(lattice.size()));
+                    if (inserted) lattice.push_back(p);
+                    id = it->second;
+                } else {
+                    id = std::uint32_t(lattice.size());
+                    lattice.push_back(p);
+                }
+                grid[std::size_t(f) * gridSize + std::size_t(j) * std::size_t(n + 1) + std::size_t(i)] = id;
+            }
+    }
+
+    // Coordinates on a cube face or edge (0 < p < n) are free and jittered: in a disc for
+    // face vertices, along the edge for edge vertices; 0 and n stay exact.
+    TriMesh mesh;
+    mesh.points.resize(lattice.size());
+    const double step = side / n;
+    const std::uint64_t seed = options.seed;
+    tbb::parallel_for(std::size_t(0), lattice.size(), [&](std::size_t id) {
+        const auto& p = lattice[id];
+        const std::uint64_t h = hashKey(seed, kStreamJitter, key(p));
+        std::array<double, 2> d = unitDiscPoint(h);
+        int freeAxes = 0;
+        for (int a = 0; a < 3; ++a) freeAxes += (p[std::size_t(a)] > 0 && p[std::size_t(a)] < n);
+        if (freeAxes == 1) d[0] = signedUnit(h);
+        Vec3 q;
+        int used = 0;
+        for (int a = 0; a < 3; ++a) {
+            const int pa = p[std::size_t(a)];
+            q[a] = latticeCoord(pa, n, side);
+            if (pa > 0 && pa < n) q[a] += kJitter * step * d[std::size_t(used++)];
+        }
+        mesh.points[id] = q;
+    });
+
+    mesh.triangles.resize(6 * 2 * std::size_t(n) * std::size_t(n));
+    for (int f = 0; f < 6; ++f) {
+        const std::uint32_t* g = grid.data() + std::size_t(f) * gridSize;
+        const auto index = [g, n](int i, int j) { return g[std::size_t(j) * std::size_t(n + 1) + std::size_t(i)]; };
+        triangulateGrid(mesh.points, n, n, index, seed, kStreamCubeDiagonal + std::uint64_t(f), false,
+                        mesh.triangles.data() + std::size_t(f) * 2 * std::size_t(n) * std::size_t(n));
+    }
+    return mesh;
+}
+
+// ---------------------------------------------------------------------------------------
+// Height fields
+// ---------------------------------------------------------------------------------------
+
+namespace {
+
+bool sameOptions(const HeightFieldOptions& a, const HeightFieldOptions& b)
+{
+    // Adding a field to HeightFieldOptions changes the size: compare it here too.
+    static_assert(sizeof(HeightFieldOptions) == 12 * sizeof(double) + 2 * sizeof(std::uint64_t),
+                  "update sameOptions for the new HeightFieldOptions field");
+    return a.kind == b.kind && a.width == b.width && a.height == b.height && a.spacing == b.spacing &&
+           a.closed == b.closed && a.thickness == b.thickness && a.relief == b.relief &&
+           a.hillWidth == b.hillWidth && a.sag == b.sag && a.wedgeSize == b.wedgeSize &&
+           a.wedgeDensity == b.wedgeDensity && a.wedgeMargin == b.wedgeMargin && a.noise == b.noise &&
+           a.seed == b.seed;
+}
+
+} // namespace
+
+double heightFieldValue(const HeightFieldOptions& options, double x, double y)
+{
+    // Tests evaluate the surface point by point: keep the last few layouts per thread
+    // (building one costs ~10 us, evaluating ~0.1 us). The cache holds only options that
+    // were validated, and the result does not depend on it.
+    struct Entry {
+        HeightFieldOptions options;
+        HeightFunction function;
+    };
+    thread_local std::vector<Entry> cache;
+    thread_local std::size_t nextSlot = 0;
+    for (const Entry& e : cache)
+        if (sameOptions(e.options, options)) return e.function(x, y);
+    Entry entry{options, HeightFunction(options)};
+    const double z = entry.function(x, y);
+    if (cache.size() < 4) {
+        cache.push_back(std::move(entry));
+    } else {
+        cache[nextSlot] = std::move(entry);
+        nextSlot = (nextSlot + 1) % cache.size();
+    }
+    return z;
+}
+
+TriMesh makeHeightField(const HeightFieldOptions& options)
+{
+    const HeightFunction height(options);  // validates
+    const int nx = latticeCells(options.width, options.spacing);
+    const int ny = latticeCells(options.height, options.spacing);
+    const double stepX = options.width / nx, stepY = options.height / ny;
+    const double reach = kJitter * std::min(stepX, stepY);
+    const std::size_t rowLength = std::size_t(nx) + 1;
+    const std::size_t numTop = rowLength * (std::size_t(ny) + 1);
+    const int nz = options.closed ? latticeCells(options.thickness, options.spacing) : 0;
+    const std::size_t perimeter = 2 * (std::size_t(nx) + std::size_t(ny));
+    const std::size_t numBottomInterior = std::size_t(nx - 1) * std::size_t(ny - 1);
+    requireVertexCount(double(numTop) + (options.closed ? double(nz) * double(perimeter) + double(numBottomInterior) : 0.0));
+
+    const std::uint64_t seed = options.seed;
+    const double W = options.width, H = options.height;
+    // xy of lattice vertex (i, j): interior jittered in a disc, border along the border.
+    const auto latticeXY = [&](int i, int j, std::uint64_t stream) -> std::array<double, 2> {
+        double x = latticeCoord(i, nx, W), y = latticeCoord(j, ny, H);
+        const bool borderX = i == 0 || i == nx, borderY = j == 0 || j == ny;
+        if (borderX && borderY) return {x, y};
+        const std::uint64_t h = hashKey(seed, stream, std::uint64_t(j) * rowLength + std::uint64_t(i));
+        if (borderX) return {x, y + reach * signedUnit(h)};
+        if (borderY) return {x + reach * signedUnit(h), y};
+        const auto d = unitDiscPoint(h);
+        return {x + reach * d[0], y + reach * d[1]};
+    };
+
+    TriMesh mesh;
+    mesh.points.resize(numTop);
+    tbb::parallel_for(tbb::blocked_range<int>(0, ny + 1), [&](const tbb::blocked_range<int>& rows) {
+        for (int j = rows.begin(); j != rows.end(); ++j)
+            for (int i = 0; i <= nx; ++i) {
+                const auto xy = latticeXY(i, j, kStreamJitter);
+                mesh.points[std::size_t(j) * rowLength + std::size_t(i)] = {xy[0], xy[1], height(xy[0], xy[1])};
+            }
+    });
+    const std::size_t numTopTriangles = 2 * std::size_t(nx) * std::size_t(ny);
+    const auto topIndex = [rowLength](int i, int j) { return std::uint32_t(std::size_t(j) * rowLength + std::size_t(i)); };
+    if (!options.closed) {
+        mesh.triangles.resize(numTopTriangles);
+        triangulateGrid(mesh.points, nx, ny, topIndex, seed, kStreamDiagonal, false, mesh.triangles.data());
+        return mesh;
+    }
+
+    // ---- Closed slab: walls below the border, then the bottom. ----
+    const double bottomZ = -options.thickness;
+    double lowestTop = std::numeric_limits<double>::infinity();
+    for (const Vec3& p : mesh.points) lowestTop = std::min(lowestTop, p.z);
+    if (!(lowestTop > bottomZ))
+        throw InvalidInputError("sample mesh: slab thickness " + formatNumber(options.thickness) +
+                                " does not reach below the lowest top point (z = " + formatNumber(lowestTop) + ").");
+
+    // Perimeter positions, counter-clockwise seen from above (the way the top triangles run
+    // along the border): bottom side +x, right side +y, top side -x, left side -y.
+    std::vector<std::array<int, 2>> border(perimeter);
+    {
+        std::size_t p = 0;
+        for (int i = 0; i < nx; ++i) border[p++] = {i, 0};
+        for (int j = 0; j < ny; ++j) border[p++] = {nx, j};
+        for (int i = nx; i > 0; --i) border[p++] = {i, ny};
+        for (int j = ny; j > 0; --j) border[p++] = {0, j};
+    }
+    // Wall vertex (column p, row r), r = 1 .. nz; row nz is the bottom outline.
+    const std::size_t wallBase = numTop;
+    const auto wallIndex = [&](std::size_t p, int r) -> std::uint32_t {
+        p %= perimeter;
+        if (r == 0) return topIndex(border[p][0], border[p][1]);
+        return std::uint32_t(wallBase + std::size_t(r - 1) * perimeter + p);
+    };
+    const std::size_t bottomBase = wallBase + std::size_t(nz) * perimeter;
+    mesh.points.resize(bottomBase + numBottomInterior);
+    // Wall rows divide each column evenly (inner rows jittered vertically by a quarter of a
+    // row, which keeps every wall triangle valid: its two same-column vertices stay apart).
+    tbb::parallel_for(std::size_t(0), perimeter, [&](std::size_t p) {
+        const Vec3 top = mesh.points[topIndex(border[p][0], border[p][1])];
+        const double dz = (top.z - bottomZ) / nz;
+        for (int r = 1; r <= nz; ++r) {
+            double z = r == nz ? bottomZ : top.z - dz * r;
+            if (r < nz) z += 0.25 * dz * signedUnit(hashKey(seed, kStreamWallJitter, p, std::uint64_t(r)));
+            mesh.points[wallIndex(p, r)] = {top.x, top.y, z};
+        }
+    });
+    // Bottom: the lattice again, border shared with the walls' last row, interior jittered
+    // by its own stream.
+    std::vector<std::uint32_t> borderPosition(numTop, 0);  // top border vertex -> perimeter position
+    for (std::size_t p = 0; p < perimeter; ++p) borderPosition[topIndex(border[p][0], border[p][1])] = std::uint32_t(p);
+    const auto bottomIndex = [&](int i, int j) -> std::uint32_t {
+        if (i == 0 || j == 0 || i == nx || j == ny) return wallIndex(borderPosition[topIndex(i, j)], nz);
+        return std::uint32_t(bottomBase + std::size_t(j - 1) * std::size_t(nx - 1) + std::size_t(i - 1));
+    };
+    tbb::parallel_for(tbb::blocked_range<int>(1, std::max(ny, 1)), [&](const tbb::blocked_range<int>& rows) {
+        for (int j = rows.begin(); j != rows.end(); ++j)
+            for (int i = 1; i < nx; ++i) {
+                const auto xy = latticeXY(i, j, kStreamBottomJitter);
+                mesh.points[bottomIndex(i, j)] = {xy[0], xy[1], bottomZ};
+            }
+    });
+
+    const std::size_t numWallTriangles = 2 * perimeter * std::size_t(nz);
+    mesh.triangles.resize(numTopTriangles + numWallTriangles + 2 * std::size_t(nx) * std::size_t(ny));
+    Triangle* out = mesh.triangles.data();
+    triangulateGrid(mesh.points, nx, ny, topIndex, seed, kStreamDiagonal, false, out);
+    // Walls: grid (perimeter position, row downwards); reversed so each wall quad runs
+    // along the top border edge opposite to the top triangle (outward normals).
+    const auto wallGrid = [&](int p, int r) { return wallIndex(std::size_t(p), r); };
+    triangulateGrid(mesh.points, int(perimeter), nz, wallGrid, seed, kStreamWallDiagonal, true, out + numTopTriangles);
+    triangulateGrid(mesh.points, nx, ny, bottomIndex, seed, kStreamBottomDiagonal, true,
+                    out + numTopTriangles + numWallTriangles);
+    return mesh;
+}
+
+} // namespace msii::samples

@@ -1,1 +1,44 @@
-int main() { return 0; }
+/// @file main.cpp
+/// @brief The `msii` program: Multi-Scale Integral Invariants for 3D scans.
+/// Every failure ends in one line "msii: error: ..." on stderr and a non-zero exit:
+/// 2 for wrong usage, 1 for anything else.
+#include "commands.h"
+
+#include <msii/core/errors.h>
+#include <msii/core/version.h>
+
+#include <iostream>
+
+int main(int argc, char** argv)
+{
+    CLI::App app{"msii: Multi-Scale Integral Invariants (volume, sphere area) per vertex of "
+                 "triangle meshes: 3D scans of tablets, seals, inscriptions and terrain."};
+    app.set_version_flag("--version", std::string("msii ") + msii::versionString());
+    app.require_subcommand(1);
+    auto runCompute = msii::tools::addComputeCommand(app);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        std::cerr << "msii: error: " << e.what() << " (see msii --help)\n";
+        return 2;
+    }
+    try {
+        if (app.got_subcommand("compute")) return runCompute();
+    } catch (const msii::Error& e) {
+        std::cerr << "msii: error: " << e.what() << '\n';
+        return 1;
+    } catch (const std::bad_alloc&) {
+        std::cerr << "msii: error: out of memory (try a larger --voxel-size)\n";
+        return 1;
+    } catch (const std::exception& e) {
+        std::cerr << "msii: error: " << e.what() << '\n';
+        return 1;
+    }
+    return 2;
+}

@@ -1,1 +1,144 @@
-// stub: to be implemented
+#include <msii/io/atomic_file.h>
+
+#include <msii/core/errors.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <system_error>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace msii {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+/// Folder of @p target ("." for a bare file name).
+fs::path folderOf(const std::string& target)
+{
+    const fs::path parent = fs::path(target).parent_path();
+    return parent.empty() ? fs::path(".") : parent;
+}
+
+[[noreturn]] void throwWriteError(const std::string& target, const std::string& reason)
+{
+    throw IOError("cannot write '" + target + "': " + reason + ".");
+}
+
+std::string errnoText(int code) { return std::strerror(code); }
+
+/// The checks shared by checkWritable() and AtomicFile: the target names a file (not a
+/// folder) and its folder exists. Permission problems surface when the file is opened.
+void checkTarget(const std::string& target)
+{
+    if (target.empty()) throw IOError("cannot write an output file with an empty name.");
+    if (fs::path(target).filename().empty())
+        throwWriteError(target, "the path names a folder, not a file");
+
+    struct stat st {};
+    if (::stat(target.c_str(), &st) == 0) {
+        if (S_ISDIR(st.st_mode)) throwWriteError(target, "it is a folder");
+        if (!S_ISREG(st.st_mode)) throwWriteError(target, "it exists and is not a regular file");
+    }
+
+    const fs::path folder = folderOf(target);
+    if (::stat(folder.c_str(), &st) != 0) {
+        if (errno == ENOENT || errno == ENOTDIR)
+            throwWriteError(target, "the folder '" + folder.string() + "' does not exist");
+        throwWriteError(target, errnoText(errno));
+    }
+    if (!S_ISDIR(st.st_mode))
+        throwWriteError(target, "'" + folder.string() + "' is not a folder");
+}
+
+} // namespace
+
+AtomicFile::AtomicFile(const std::string& target) : mTarget(target)
+{
+    checkTarget(target);
+
+    // A per-process counter keeps temporary names unique when several outputs are written
+    // to the same folder at once; O_EXCL guarantees we never clobber someone else's file.
+    static std::atomic<unsigned> counter{0};
+    const fs::path folder = folderOf(target);
+    const std::string name = fs::path(target).filename().string();
+    int fd = -1;
+    for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
+        mTemp = (folder / ("." + name + ".tmp-" + std::to_string(::getpid()) + "-" +
+                           std::to_string(counter.fetch_add(1))))
+                    .string();
+        fd = ::open(mTemp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        if (fd < 0 && errno != EEXIST) break;
+    }
+    if (fd < 0) {
+        const int code = errno;
+        mTemp.clear();
+        throwWriteError(target, errnoText(code));
+    }
+    mFile = ::fdopen(fd, "wb");
+    if (!mFile) {
+        const int code = errno;
+        ::close(fd);
+        ::unlink(mTemp.c_str());
+        mTemp.clear();
+        throwWriteError(target, errnoText(code));
+    }
+}
+
+AtomicFile::~AtomicFile()
+{
+    if (mFile) std::fclose(mFile);
+    if (!mCommitted && !mTemp.empty()) ::unlink(mTemp.c_str());
+}
+
+void AtomicFile::write(const void* data, std::size_t bytes)
+{
+    if (!mFile) throwWriteError(mTarget, "the file is already closed");
+    if (bytes == 0) return;
+    errno = 0;
+    if (std::fwrite(data, 1, bytes, mFile) != bytes) {
+        const int code = errno != 0 ? errno : EIO;
+        throwWriteError(mTarget, errnoText(code));
+    }
+}
+
+void AtomicFile::commit()
+{
+    if (mCommitted) return;
+    if (!mFile) throwWriteError(mTarget, "the file is already closed");
+    // Durability against power loss (fsync) is not attempted: the goal is that readers and
+    // interrupted runs never see a half-written file, which rename() alone guarantees.
+    errno = 0;
+    const bool flushed = std::fflush(mFile) == 0 && !std::ferror(mFile);
+    const int flushErrno = errno;
+    const bool closed = std::fclose(mFile) == 0;
+    const int closeErrno = errno;
+    mFile = nullptr;
+    if (!flushed) throwWriteError(mTarget, errnoText(flushErrno != 0 ? flushErrno : EIO));
+    if (!closed) throwWriteError(mTarget, errnoText(closeErrno));
+    if (std::rename(mTemp.c_str(), mTarget.c_str()) != 0) throwWriteError(mTarget, errnoText(errno));
+    mCommitted = true;
+}
+
+void checkWritable(const std::string& target)
+{
+    checkTarget(target);
+    const fs::path folder = folderOf(target);
+    if (::access(folder.c_str(), W_OK) != 0)
+        throwWriteError(target, "the folder '" + folder.string() + "' is not writable (" +
+                                    errnoText(errno) + ")");
+}
+
+void writeTextFileAtomic(const std::string& target, const std::string& text)
+{
+    AtomicFile file(target);
+    file.write(text);
+    file.commit();
+}
+
+} // namespace msii

@@ -1,1 +1,266 @@
-// stub: to be implemented
+#include <msii/io/write_ply.h>
+
+#include <msii/core/errors.h>
+#include <msii/io/atomic_file.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
+              "write_ply.cpp writes binary_little_endian by copying memory: little-endian hosts only");
+
+namespace msii {
+
+namespace {
+
+/// Records per chunk: each chunk is formatted independently (in parallel), then chunks are
+/// written in order, a batch at a time so the memory held stays bounded.
+constexpr std::size_t kChunkRecords = std::size_t(1) << 15;
+constexpr std::size_t kChunksPerBatch = 16;
+
+using Buffer = std::vector<char>;
+
+/// Calls fill(begin, end, buffer) for consecutive ranges of [0, count) in parallel and
+/// writes the buffers to @p file in range order (so the output does not depend on threads).
+template <class Fill>
+void writeInChunks(AtomicFile& file, std::size_t count, const Fill& fill)
+{
+    const std::size_t numChunks = (count + kChunkRecords - 1) / kChunkRecords;
+    std::vector<Buffer> buffers(std::min(numChunks, kChunksPerBatch));
+    for (std::size_t first = 0; first < numChunks; first += kChunksPerBatch) {
+        const std::size_t last = std::min(numChunks, first + kChunksPerBatch);
+        tbb::parallel_for(first, last, [&](std::size_t c) {
+            Buffer& buffer = buffers[c - first];
+            buffer.clear();
+            fill(c * kChunkRecords, std::min(count, (c + 1) * kChunkRecords), buffer);
+        });
+        for (std::size_t c = first; c < last; ++c) file.write(buffers[c - first].data(), buffers[c - first].size());
+    }
+}
+
+template <class T>
+inline char* put(char* out, T value)
+{
+    std::memcpy(out, &value, sizeof(T));
+    return out + sizeof(T);
+}
+
+/// Appends the shortest decimal text that reads back to exactly @p value, then @p sep.
+template <class T>
+inline void appendNumber(Buffer& buffer, T value, char sep)
+{
+    char text[64];
+    const auto result = std::to_chars(text, text + sizeof(text) - 1, value);
+    *result.ptr = sep;
+    buffer.insert(buffer.end(), text, result.ptr + 1);
+}
+
+/// True if storing the points as float would move a coordinate by more than 1e-7 of the
+/// bounding box diagonal (e.g. scans in map coordinates with large offsets).
+bool needsDoublePoints(const std::vector<Vec3>& points)
+{
+    struct Box {
+        Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                std::numeric_limits<double>::infinity()};
+        Vec3 hi = -lo;
+    };
+    const auto unite = [](Box a, const Box& b) {
+        for (int k = 0; k < 3; ++k) {
+            a.lo[k] = std::min(a.lo[k], b.lo[k]);
+            a.hi[k] = std::max(a.hi[k], b.hi[k]);
+        }
+        return a;
+    };
+    const Box box = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, points.size(), 1 << 14), Box{},
+        [&](const tbb::blocked_range<std::size_t>& r, Box b) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                const Vec3& p = points[i];
+                if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+                for (int k = 0; k < 3; ++k) {
+                    b.lo[k] = std::min(b.lo[k], p[k]);
+                    b.hi[k] = std::max(b.hi[k], p[k]);
+                }
+            }
+            return b;
+        },
+        unite);
+    const double diagonal = box.lo.x <= box.hi.x ? norm(box.hi - box.lo) : 0.0;
+    const double tolerance = 1e-7 * diagonal;
+    return tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, points.size(), 1 << 14), false,
+        [&](const tbb::blocked_range<std::size_t>& r, bool lossy) {
+            for (std::size_t i = r.begin(); i != r.end() && !lossy; ++i) {
+                for (int k = 0; k < 3; ++k) {
+                    const double c = points[i][k];
+                    // NaN compares false and stays NaN in float; out-of-range values become
+                    // infinite in float and so count as lossy.
+                    if (std::abs(double(float(c)) - c) > tolerance) lossy = true;
+                }
+            }
+            return lossy;
+        },
+        [](bool a, bool b) { return a || b; });
+}
+
+std::string oneLine(std::string text)
+{
+    std::replace(text.begin(), text.end(), '\n', ' ');
+    std::replace(text.begin(), text.end(), '\r', ' ');
+    return text;
+}
+
+bool isPlyName(const std::string& name)
+{
+    if (name.empty()) return false;
+    return std::none_of(name.begin(), name.end(),
+                        [](unsigned char c) { return c <= ' ' || c >= 127; });
+}
+
+void validate(const std::string& path, const TriMesh& mesh,
+              const std::vector<VertexProperty>& properties, const WritePlyOptions& options)
+{
+    const std::size_t n = mesh.numVertices();
+    const std::string where = "; cannot write '" + path + "'.";
+    if (n > std::size_t(std::numeric_limits<std::int32_t>::max()))
+        throw InvalidInputError("the mesh has too many vertices for PLY int indices" + where);
+    for (const VertexProperty& property : properties) {
+        if (!isPlyName(property.name))
+            throw InvalidInputError("the vertex property name '" + property.name +
+                                    "' is empty or contains spaces" + where);
+        if (property.values.size() != n)
+            throw InvalidInputError("the vertex property '" + property.name + "' has " +
+                                    std::to_string(property.values.size()) + " values for " +
+                                    std::to_string(n) + " vertices" + where);
+    }
+    if (options.listLength < 0 || options.listLength > 255)
+        throw InvalidInputError("the list property length " + std::to_string(options.listLength) +
+                                " is outside 0..255" + where);
+    if (options.listLength > 0) {
+        if (!isPlyName(options.listName))
+            throw InvalidInputError("the list property name '" + options.listName +
+                                    "' is empty or contains spaces" + where);
+        if (options.listValues.size() != n * std::size_t(options.listLength))
+            throw InvalidInputError("the list property '" + options.listName + "' has " +
+                                    std::to_string(options.listValues.size()) + " values for " +
+                                    std::to_string(n) + " vertices of " +
+                                    std::to_string(options.listLength) + where);
+    }
+    for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
+        for (std::uint32_t v : mesh.triangles[f])
+            if (v >= n)
+                throw InvalidInputError("triangle " + std::to_string(f) + " refers to vertex " +
+                                        std::to_string(v) + " but the mesh has only " +
+                                        std::to_string(n) + " vertices" + where);
+}
+
+} // namespace
+
+void writePly(const std::string& path, const TriMesh& mesh,
+              const std::vector<VertexProperty>& properties, const WritePlyOptions& options)
+{
+    validate(path, mesh, properties, options);
+    checkWritable(path);
+
+    const std::size_t numVertices = mesh.numVertices();
+    const std::size_t numFaces = mesh.numTriangles();
+    const bool hasList = options.listLength > 0;
+    const std::size_t listLength = hasList ? std::size_t(options.listLength) : 0;
+    const bool doublePoints = options.forceDoublePoints || needsDoublePoints(mesh.points);
+    const char* pointType = doublePoints ? "double" : "float";
+
+    std::string header = "ply\nformat ";
+    header += options.binary ? "binary_little_endian 1.0\n" : "ascii 1.0\n";
+    for (const std::string& comment : options.comments) header += "comment " + oneLine(comment) + "\n";
+    header += "element vertex " + std::to_string(numVertices) + "\n";
+    for (const char* axis : {"x", "y", "z"}) header += std::string("property ") + pointType + " " + axis + "\n";
+    for (const VertexProperty& property : properties) header += "property float " + property.name + "\n";
+    if (hasList) header += "property list uchar float " + options.listName + "\n";
+    header += "element face " + std::to_string(numFaces) + "\n";
+    header += "property list uchar int vertex_indices\nend_header\n";
+
+    AtomicFile file(path);
+    file.write(header);
+
+    const Vec3* points = mesh.points.data();
+    const float* list = options.listValues.data();
+    if (options.binary) {
+        const std::size_t vertexBytes = (doublePoints ? 3 * sizeof(double) : 3 * sizeof(float)) +
+                                        properties.size() * sizeof(float) +
+                                        (hasList ? 1 + listLength * sizeof(float) : 0);
+        writeInChunks(file, numVertices, [&](std::size_t begin, std::size_t end, Buffer& buffer) {
+            buffer.resize((end - begin) * vertexBytes);
+            char* out = buffer.data();
+            for (std::size_t v = begin; v < end; ++v) {
+                const Vec3& p = points[v];
+                if (doublePoints) {
+                    out = put(out, p.x);
+                    out = put(out, p.y);
+                    out = put(out, p.z);
+                } else {
+                    out = put(out, float(p.x));
+                    out = put(out, float(p.y));
+                    out = put(out, float(p.z));
+                }
+                for (const VertexProperty& property : properties) out = put(out, property.values[v]);
+                if (hasList) {
+                    *out++ = char(std::uint8_t(listLength));
+                    std::memcpy(out, list + v * listLength, listLength * sizeof(float));
+                    out += listLength * sizeof(float);
+                }
+            }
+        });
+        constexpr std::size_t faceBytes = 1 + 3 * sizeof(std::int32_t);
+        writeInChunks(file, numFaces, [&](std::size_t begin, std::size_t end, Buffer& buffer) {
+            buffer.resize((end - begin) * faceBytes);
+            char* out = buffer.data();
+            for (std::size_t f = begin; f < end; ++f) {
+                *out++ = 3;
+                for (std::uint32_t v : mesh.triangles[f]) out = put(out, std::int32_t(v));
+            }
+        });
+    } else {
+        writeInChunks(file, numVertices, [&](std::size_t begin, std::size_t end, Buffer& buffer) {
+            buffer.reserve((end - begin) * (40 + 12 * (properties.size() + listLength)));
+            for (std::size_t v = begin; v < end; ++v) {
+                const Vec3& p = points[v];
+                const bool last = properties.empty() && !hasList;
+                for (int k = 0; k < 3; ++k) {
+                    const char sep = (k == 2 && last) ? '\n' : ' ';
+                    if (doublePoints) appendNumber(buffer, p[k], sep);
+                    else appendNumber(buffer, float(p[k]), sep);
+                }
+                for (std::size_t i = 0; i < properties.size(); ++i)
+                    appendNumber(buffer, properties[i].values[v],
+                                 (i + 1 == properties.size() && !hasList) ? '\n' : ' ');
+                if (hasList) {
+                    appendNumber(buffer, int(listLength), listLength == 0 ? '\n' : ' ');
+                    for (std::size_t i = 0; i < listLength; ++i)
+                        appendNumber(buffer, list[v * listLength + i], i + 1 == listLength ? '\n' : ' ');
+                }
+            }
+        });
+        writeInChunks(file, numFaces, [&](std::size_t begin, std::size_t end, Buffer& buffer) {
+            buffer.reserve((end - begin) * 32);
+            for (std::size_t f = begin; f < end; ++f) {
+                const Triangle& t = mesh.triangles[f];
+                buffer.push_back('3');
+                buffer.push_back(' ');
+                appendNumber(buffer, t[0], ' ');
+                appendNumber(buffer, t[1], ' ');
+                appendNumber(buffer, t[2], '\n');
+            }
+        });
+    }
+    file.commit();
+}
+
+} // namespace msii

@@ -1,1 +1,136 @@
-// stub: to be implemented
+#include "levelset_impl.h"
+#include "mesh_distance.h"
+
+#include <msii/core/errors.h>
+
+#include <openvdb/tools/Interpolation.h>
+#include <openvdb/tools/MeshToVolume.h>
+#include <openvdb/tools/SignedFloodFill.h>
+#include <openvdb/tree/LeafManager.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <mutex>
+#include <sstream>
+
+namespace msii {
+
+namespace {
+
+void initializeOpenVdb()
+{
+    static std::once_flag flag;
+    std::call_once(flag, [] { openvdb::initialize(); });
+}
+
+} // namespace
+
+LevelSet::LevelSet() = default;
+LevelSet::LevelSet(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
+LevelSet::~LevelSet() = default;
+LevelSet::LevelSet(LevelSet&&) noexcept = default;
+LevelSet& LevelSet::operator=(LevelSet&&) noexcept = default;
+
+const LevelSetInfo& LevelSet::info() const { return mImpl->info; }
+
+double LevelSet::signedDistance(const Vec3& world) const
+{
+    const openvdb::Vec3d xyz = mImpl->grid->transform().worldToIndex(
+        openvdb::Vec3d(world.x, world.y, world.z));
+    return openvdb::tools::BoxSampler::sample(mImpl->grid->tree(), xyz);
+}
+
+LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options, Progress* progress)
+{
+    initializeOpenVdb();
+    const double h = options.voxelSize;
+    if (!(h > 0) || !std::isfinite(h))
+        throw InvalidInputError("the voxel size must be a positive number");
+    if (!(options.halfWidth >= 2))
+        throw InvalidInputError("the narrow band must be at least 2 voxels wide");
+    if (mesh.empty()) throw InvalidInputError("the mesh is empty");
+
+    Vec3 lo = mesh.points.front(), hi = lo;
+    for (const auto& p : mesh.points)
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], p[a]);
+            hi[a] = std::max(hi[a], p[a]);
+        }
+    for (int a = 0; a < 3; ++a) {
+        if ((hi[a] - lo[a]) / h > double(1 << 20)) {
+            std::ostringstream msg;
+            msg << "the voxel size " << h << " is too small for a mesh of this extent";
+            throw InvalidInputError(msg.str());
+        }
+    }
+
+    if (progress) progress->start("level set", 3);
+    // Index space is shifted so that the mesh sits in the middle of one of OpenVDB's root
+    // children (4096^3 voxels): then the signed flood fill gives every voxel near the mesh
+    // its side, with no reliance on the root background.
+    auto transform = openvdb::math::Transform::createLinearTransform(h);
+    const Vec3 centre = (lo + hi) * 0.5;
+    const openvdb::Vec3d shift(h * (std::round(centre.x / h) - 2048.0),
+                               h * (std::round(centre.y / h) - 2048.0),
+                               h * (std::round(centre.z / h) - 2048.0));
+    transform->postTranslate(shift);
+    std::vector<openvdb::Vec3s> indexPoints(mesh.numVertices());
+    std::vector<openvdb::Vec3I> triangles(mesh.numTriangles());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.numVertices()), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            const Vec3& p = mesh.points[i];
+            indexPoints[i] = openvdb::Vec3s(transform->worldToIndex(openvdb::Vec3d(p.x, p.y, p.z)));
+        }
+    });
+    for (std::size_t f = 0; f < mesh.numTriangles(); ++f) {
+        const auto& t = mesh.triangles[f];
+        triangles[f] = openvdb::Vec3I(t[0], t[1], t[2]);
+    }
+
+    // Unsigned distances with the closest triangle of every band voxel; signs follow below.
+    openvdb::tools::QuadAndTriangleDataAdapter<openvdb::Vec3s, openvdb::Vec3I> adapter(
+        indexPoints, triangles);
+    openvdb::Int32Grid closest;
+    const float band = float(options.halfWidth);
+    openvdb::FloatGrid::Ptr grid = openvdb::tools::meshToVolume<openvdb::FloatGrid>(
+        adapter, *transform, band, band, openvdb::tools::UNSIGNED_DISTANCE_FIELD, &closest);
+    indexPoints.clear();
+    indexPoints.shrink_to_fit();
+    triangles.clear();
+    triangles.shrink_to_fit();
+    if (progress) progress->advance();
+
+    // OpenVDB's distances beyond the first voxel come from a neighbour's triangle and can be
+    // off by a good part of a voxel: make every band voxel exact, and signed by the
+    // pseudo-normal of its closest feature.
+    auto distance = std::make_shared<detail::MeshDistance>(mesh);
+    openvdb::tree::LeafManager<openvdb::FloatTree> leaves(grid->tree());
+    leaves.foreach([&](openvdb::FloatTree::LeafNodeType& leaf, std::size_t) {
+        auto indexAcc = closest.getConstAccessor();
+        for (auto it = leaf.beginValueOn(); it; ++it) {
+            const openvdb::Coord ijk = it.getCoord();
+            const std::int32_t f = indexAcc.getValue(ijk);
+            if (f < 0 || std::size_t(f) >= mesh.numTriangles()) continue;
+            const openvdb::Vec3d w = transform->indexToWorld(ijk);
+            std::uint32_t face = std::uint32_t(f);
+            it.setValue(float(distance->signedDistance(Vec3(w.x(), w.y(), w.z()), -1, face)));
+        }
+    });
+    if (progress) progress->advance();
+    openvdb::tools::signedFloodFill(grid->tree());
+    if (progress) progress->advance();
+    if (progress) progress->end();
+
+    auto impl = std::make_unique<LevelSet::Impl>();
+    impl->grid = grid;
+    impl->distance = distance;
+    impl->info.voxelSize = h;
+    impl->info.halfWidth = options.halfWidth;
+    impl->info.activeVoxels = grid->activeVoxelCount();
+    impl->info.memoryBytes = grid->memUsage();
+    return LevelSet(std::move(impl));
+}
+
+} // namespace msii

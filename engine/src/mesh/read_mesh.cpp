@@ -1,1 +1,288 @@
-// stub: to be implemented
+#include <msii/mesh/read_mesh.h>
+
+#include <msii/core/errors.h>
+#include <msii/mesh/read_ply.h>
+
+#include <OpenMesh/Core/IO/IOManager.hh>
+#include <OpenMesh/Core/IO/Options.hh>
+#include <OpenMesh/Core/IO/importer/BaseImporter.hh>
+#include <OpenMesh/Core/System/omstream.hh>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <mutex>
+#include <streambuf>
+#include <vector>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace msii {
+
+namespace {
+
+using OpenMesh::FaceHandle;
+using OpenMesh::HalfedgeHandle;
+using OpenMesh::VertexHandle;
+
+/// Collects what an OpenMesh reader delivers, as it comes: no topology is built, so faces
+/// that OpenMesh's own mesh kernel would refuse (non-manifold, duplicate) are kept for
+/// mesh_check to report. Polygons are fan-triangulated.
+class RawImporter final : public OpenMesh::IO::BaseImporter {
+public:
+    std::vector<Vec3> points;
+    std::vector<Triangle> triangles;
+    std::size_t numPolygons = 0;
+    /// First face index outside the vertex array, if any (reported after reading, since
+    /// throwing through OpenMesh's reader would skip its clean-up).
+    bool badIndex = false;
+    long long badIndexValue = 0;
+    std::size_t badIndexFace = 0;
+
+    VertexHandle add_vertex(const OpenMesh::Vec3f& p) override { return addPoint({p[0], p[1], p[2]}); }
+    VertexHandle add_vertex(const OpenMesh::Vec3d& p) override { return addPoint({p[0], p[1], p[2]}); }
+    VertexHandle add_vertex() override { return addPoint({}); }
+    void set_point(VertexHandle v, const OpenMesh::Vec3f& p) override
+    {
+        if (v.is_valid() && std::size_t(v.idx()) < points.size()) points[std::size_t(v.idx())] = {p[0], p[1], p[2]};
+    }
+
+    FaceHandle add_face(const VHandles& vertices) override
+    {
+        const std::size_t face = numPolygons++;
+        for (const VertexHandle& v : vertices) {
+            if (v.idx() < 0 || std::size_t(v.idx()) >= points.size()) {
+                if (!badIndex) {
+                    badIndex = true;
+                    badIndexValue = v.idx();
+                    badIndexFace = face;
+                }
+                return FaceHandle(int(face));
+            }
+        }
+        for (std::size_t i = 2; i < vertices.size(); ++i)
+            triangles.push_back({std::uint32_t(vertices[0].idx()), std::uint32_t(vertices[i - 1].idx()),
+                                 std::uint32_t(vertices[i].idx())});
+        return FaceHandle(int(face));
+    }
+
+    size_t n_vertices() const override { return points.size(); }
+    size_t n_faces() const override { return numPolygons; }
+    size_t n_edges() const override { return 0; }
+    void reserve(unsigned int nV, unsigned int /*nE*/, unsigned int nF) override
+    {
+        points.reserve(nV);
+        triangles.reserve(nF);
+    }
+
+    // Everything else (attributes, half-edge construction) is of no use here.
+    HalfedgeHandle add_edge(VertexHandle, VertexHandle) override { return HalfedgeHandle(); }
+    FaceHandle add_face(HalfedgeHandle) override { return FaceHandle(); }
+    void add_face_texcoords(FaceHandle, VertexHandle, const std::vector<OpenMesh::Vec2f>&) override {}
+    void add_face_texcoords(FaceHandle, VertexHandle, const std::vector<OpenMesh::Vec3f>&) override {}
+    void set_face_texindex(FaceHandle, int) override {}
+    void set_halfedge(VertexHandle, HalfedgeHandle) override {}
+    void set_normal(VertexHandle, const OpenMesh::Vec3f&) override {}
+    void set_normal(VertexHandle, const OpenMesh::Vec3d&) override {}
+    void set_color(VertexHandle, const OpenMesh::Vec3uc&) override {}
+    void set_color(VertexHandle, const OpenMesh::Vec4uc&) override {}
+    void set_color(VertexHandle, const OpenMesh::Vec3f&) override {}
+    void set_color(VertexHandle, const OpenMesh::Vec4f&) override {}
+    void set_texcoord(VertexHandle, const OpenMesh::Vec2f&) override {}
+    void set_status(VertexHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+    void set_next(HalfedgeHandle, HalfedgeHandle) override {}
+    void set_face(HalfedgeHandle, FaceHandle) override {}
+    void request_face_texcoords2D() override {}
+    void set_texcoord(HalfedgeHandle, const OpenMesh::Vec2f&) override {}
+    void set_texcoord(VertexHandle, const OpenMesh::Vec3f&) override {}
+    void set_texcoord(HalfedgeHandle, const OpenMesh::Vec3f&) override {}
+    void set_status(HalfedgeHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+    void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec3uc&) override {}
+    void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec4uc&) override {}
+    void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec3f&) override {}
+    void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec4f&) override {}
+    void set_status(OpenMesh::EdgeHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+    void set_normal(FaceHandle, const OpenMesh::Vec3f&) override {}
+    void set_normal(FaceHandle, const OpenMesh::Vec3d&) override {}
+    void set_color(FaceHandle, const OpenMesh::Vec3uc&) override {}
+    void set_color(FaceHandle, const OpenMesh::Vec4uc&) override {}
+    void set_color(FaceHandle, const OpenMesh::Vec3f&) override {}
+    void set_color(FaceHandle, const OpenMesh::Vec4f&) override {}
+    void set_status(FaceHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+    void add_texture_information(int, std::string) override {}
+
+private:
+    VertexHandle addPoint(const Vec3& p)
+    {
+        points.push_back(p);
+        return VertexHandle(int(points.size() - 1));
+    }
+};
+
+/// A stream buffer that swallows everything.
+class NullBuffer : public std::streambuf {
+protected:
+    int overflow(int c) override { return traits_type::not_eof(c); }
+    std::streamsize xsputn(const char*, std::streamsize n) override { return n; }
+};
+
+/// Silences OpenMesh's diagnostics while it reads, so the user sees only msii's message:
+/// its omerr/omout/omlog streams, and std::cerr/std::clog/std::cout, which some of its
+/// readers use directly (e.g. the OBJ reader's material warnings). Restores all on exit.
+/// @note Output of other threads to these streams is lost meanwhile; reading is a short,
+///       single-threaded stage at the start of a run.
+class QuietOpenMesh {
+public:
+    QuietOpenMesh()
+    {
+        mWasEnabled[0] = ::omerr().is_enabled();
+        mWasEnabled[1] = ::omout().is_enabled();
+        mWasEnabled[2] = ::omlog().is_enabled();
+        ::omerr().disable();
+        ::omout().disable();
+        ::omlog().disable();
+        mCerr = std::cerr.rdbuf(&mNull);
+        mClog = std::clog.rdbuf(&mNull);
+        mCout = std::cout.rdbuf(&mNull);
+    }
+    ~QuietOpenMesh()
+    {
+        std::cerr.rdbuf(mCerr);
+        std::clog.rdbuf(mClog);
+        std::cout.rdbuf(mCout);
+        if (mWasEnabled[0]) ::omerr().enable();
+        if (mWasEnabled[1]) ::omout().enable();
+        if (mWasEnabled[2]) ::omlog().enable();
+    }
+    QuietOpenMesh(const QuietOpenMesh&) = delete;
+    QuietOpenMesh& operator=(const QuietOpenMesh&) = delete;
+
+private:
+    NullBuffer mNull;
+    std::streambuf* mCerr = nullptr;
+    std::streambuf* mClog = nullptr;
+    std::streambuf* mCout = nullptr;
+    bool mWasEnabled[3] = {true, true, true};
+};
+
+/// OpenMesh only says "false" when it cannot open a file: find out why ourselves first.
+void checkReadable(const std::string& path)
+{
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw IOError("cannot open '" + path + "': " + std::strerror(errno) + ".");
+    struct stat st {};
+    const bool isFolder = ::fstat(fd, &st) == 0 && S_ISDIR(st.st_mode);
+    const bool isEmpty = ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size == 0;
+    ::close(fd);
+    if (isFolder) throw IOError("cannot read '" + path + "': it is a folder.");
+    if (isEmpty) throw InvalidInputError("'" + path + "' is empty.");
+}
+
+/// OpenMesh's OFF reader does not notice a file that ends early (it repeats the last values
+/// read): compare the counts the header declares with the number of values present. Only a
+/// lower bound is checked (3 coordinates per vertex, a count and 3 indices per face), so
+/// variants with colours or normals per line pass; binary OFF is left to OpenMesh.
+void checkOffComplete(const std::string& path)
+{
+    std::FILE* file = std::fopen(path.c_str(), "rb");
+    if (!file) return;
+    std::vector<std::string> head;  // the first few values
+    std::uint64_t numTokens = 0;
+    bool inToken = false, inComment = false;
+    std::vector<char> buffer(1 << 16);
+    std::size_t got;
+    while ((got = std::fread(buffer.data(), 1, buffer.size(), file)) > 0) {
+        for (std::size_t i = 0; i < got; ++i) {
+            const char c = buffer[i];
+            if (inComment) {
+                inComment = c != '\n';
+                continue;
+            }
+            const bool space = std::isspace(static_cast<unsigned char>(c)) != 0;
+            if (c == '#' || space) {
+                inComment = c == '#';
+                inToken = false;
+                continue;
+            }
+            if (!inToken) {
+                inToken = true;
+                if (++numTokens <= 6) head.emplace_back();
+            }
+            if (numTokens <= 6) head.back() += c;
+        }
+    }
+    std::fclose(file);
+
+    if (head.empty() || head[0].size() < 3 || head[0].compare(head[0].size() - 3, 3, "OFF") != 0) return;
+    std::size_t pos = 1;
+    std::uint64_t dimension = head[0].find('4') != std::string::npos ? 4 : 3;
+    const auto number = [&](std::size_t i, std::uint64_t& value) {
+        if (i >= head.size()) return false;
+        const auto r = std::from_chars(head[i].data(), head[i].data() + head[i].size(), value);
+        return r.ec == std::errc() && r.ptr == head[i].data() + head[i].size();
+    };
+    if (head[0].find('n') != std::string::npos && !number(pos++, dimension)) return;
+    if (pos < head.size() && head[pos] == "BINARY") return;
+    std::uint64_t numVertices = 0, numFaces = 0, numEdges = 0;
+    if (!number(pos, numVertices) || !number(pos + 1, numFaces) || !number(pos + 2, numEdges)) return;
+    const std::uint64_t required = pos + 3 + dimension * numVertices + 4 * numFaces;
+    if (numTokens < required)
+        throw InvalidInputError("unexpected end of file in '" + path + "' (it declares " +
+                                std::to_string(numVertices) + (numVertices == 1 ? " vertex and " : " vertices and ") +
+                                std::to_string(numFaces) + (numFaces == 1 ? " face" : " faces") +
+                                " but holds only " + std::to_string(numTokens) + " values).");
+}
+
+ReadMeshResult readWithOpenMesh(const std::string& path, const std::string& format)
+{
+    checkReadable(path);
+    RawImporter importer;
+    bool ok = false;
+    {
+        // OpenMesh's reader singletons and stream switches are global state.
+        static std::mutex openMeshMutex;
+        const std::lock_guard<std::mutex> lock(openMeshMutex);
+        const QuietOpenMesh quiet;
+        OpenMesh::IO::Options options;
+        ok = OpenMesh::IO::IOManager().read(path, importer, options);
+    }
+    if (!ok) throw InvalidInputError("'" + path + "' could not be read as " + format + " (malformed file).");
+    if (format == "off") checkOffComplete(path);
+    if (importer.badIndex)
+        throw InvalidInputError("'" + path + "' has a vertex index " + std::to_string(importer.badIndexValue) +
+                                " in face " + std::to_string(importer.badIndexFace + 1) + " but only " +
+                                std::to_string(importer.points.size()) + " vertices.");
+    if (importer.points.empty()) throw InvalidInputError("'" + path + "' contains no vertices.");
+    if (importer.triangles.empty()) throw InvalidInputError("'" + path + "' contains no faces.");
+
+    ReadMeshResult result;
+    result.mesh.points = std::move(importer.points);
+    result.mesh.triangles = std::move(importer.triangles);
+    result.numPolygonsRead = importer.numPolygons;
+    result.format = format;
+    return result;
+}
+
+} // namespace
+
+ReadMeshResult readMesh(const std::string& path, const ReadMeshOptions& options)
+{
+    std::string extension = std::filesystem::path(path).extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    if (extension == ".ply") return readPly(path, options);
+    if (extension == ".obj" || extension == ".off" || extension == ".stl")
+        return readWithOpenMesh(path, extension.substr(1));
+    const std::string found = extension.empty() ? "it has no file extension"
+                                                : "unknown file extension '" + extension + "'";
+    throw InvalidInputError("cannot read '" + path + "': " + found + " (supported: .ply, .obj, .off, .stl).");
+}
+
+} // namespace msii

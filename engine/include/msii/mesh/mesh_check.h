@@ -20,6 +20,9 @@ struct MeshCheckOptions {
     double degenerateAreaRatio = 1e-12;
 };
 
+/// Edge counts (non-manifold, inconsistent, border), `closed` and unreferenced vertices are
+/// computed over the faces that are neither degenerate nor duplicate, i.e. they describe the
+/// mesh as removeBadFaces() leaves it (so one bad face is not reported several times).
 struct MeshCheckResult {
     std::size_t numNonFinitePoints = 0;    ///< vertices with NaN or infinite coordinates
     std::size_t numDegenerateFaces = 0;    ///< repeated index or (near) zero area
@@ -39,7 +42,8 @@ struct MeshCheckResult {
     std::string firstProblem() const;
 };
 
-/// Analyses @p mesh (parallel; edges sorted with TBB, so deterministic).
+/// Analyses @p mesh (parallel with TBB; the result does not depend on the thread count).
+/// @throw InvalidInputError for meshes of more than 2^31 vertices.
 MeshCheckResult checkMesh(const TriMesh& mesh, const MeshCheckOptions& options = {});
 
 /// Removes the faces listed in check.degenerateFaces and check.duplicateFaces; returns how

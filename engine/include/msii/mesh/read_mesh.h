@@ -3,8 +3,11 @@
 /// @brief Reading triangle meshes: PLY (binary little/big endian and ascii, `face` and
 /// `tristrips` elements, any extra vertex properties), OBJ, OFF and STL (ascii and binary).
 /// OBJ/OFF/STL are read through OpenMesh's readers into a raw importer, so no face is
-/// dropped or altered on the way; PLY has its own reader (mesh/read_ply.h) because
-/// OpenMesh's PLY reader knows no `tristrips`. Polygons are fan-triangulated.
+/// dropped or altered on the way (non-manifold and duplicate faces reach mesh_check; only
+/// OpenMesh's OBJ and STL readers themselves drop repeated vertices of a face, and STL
+/// corners are merged by position); PLY has its own reader (mesh/read_ply.h) because
+/// OpenMesh's PLY reader knows no `tristrips`. Polygons are fan-triangulated. A file with
+/// no vertices or no faces is an error.
 
 #include <msii/mesh/trimesh.h>
 

@@ -1,0 +1,56 @@
+#pragma once
+/// @file compute.h
+/// @brief The whole per-mesh job of `msii compute`: check the mesh, choose the voxel size,
+/// build the level set, compute the invariants, mask what reaches a border. I/O is left to
+/// the caller (tools/msii), so tests and other programs run exactly what users run.
+
+#include <msii/core/progress.h>
+#include <msii/invariants/volume_sphere.h>
+#include <msii/mesh/mesh_check.h>
+#include <msii/mesh/mesh_stats.h>
+#include <msii/mesh/trimesh.h>
+
+#include <string>
+#include <vector>
+
+namespace msii {
+
+struct ComputeOptions {
+    double radius = 0;              ///< largest radius R (mesh units); required
+    int scales = 16;                ///< N: radii r_j = j·R/N
+    /// Finest voxel edge; 0 = automatic (chooseVoxelSize).
+    double voxelSize = 0;
+    /// Precision knob: each radius is evaluated on the coarsest grid where r/h >= this.
+    double minVoxelsPerRadius = 6.0;
+    bool computeSphere = true;      ///< S as well as V
+    bool repair = false;            ///< drop degenerate and duplicate faces instead of failing
+};
+
+struct ComputeTimings {
+    double check = 0, levelSet = 0, occupancy = 0, stencils = 0, interpolation = 0, total = 0;
+};
+
+struct ComputeResult {
+    VolumeSphereResult invariants;
+    MeshStats stats;
+    MeshCheckResult check;
+    std::size_t removedFaces = 0;      ///< with repair
+    double voxelSize = 0;              ///< finest voxel edge used
+    double bandHalfWidth = 0;          ///< voxels
+    std::size_t levelSetVoxels = 0, levelSetBytes = 0;
+    ComputeTimings timings;
+    std::vector<std::string> warnings; ///< things the user should know (one sentence each)
+};
+
+/// The automatic voxel size: fine enough that the first radius of at least 3 median edge
+/// lengths has r/h >= minVoxelsPerRadius, but not finer than half the median edge (the mesh
+/// holds no detail below that, and the level set's cost grows with its resolution).
+double chooseVoxelSize(double medianEdge, const std::vector<double>& radii,
+                       double minVoxelsPerRadius);
+
+/// Runs the job on @p mesh (which may be modified by repair).
+/// @throw InvalidInputError for unusable meshes or parameters, with one clear sentence.
+ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options,
+                                Progress* progress = nullptr);
+
+} // namespace msii

@@ -1,0 +1,68 @@
+#pragma once
+/// @file levelset.h
+/// @brief The mesh as a narrow-band signed distance field (OpenVDB), the first stage of the
+/// V and S computation. OpenVDB types stay behind this header (pimpl) so that including it
+/// is cheap; engine code that needs the grid includes src/levelset/levelset_impl.h.
+///
+/// Sign convention: negative inside the solid, positive outside. The solid is what the
+/// triangles' normals point away from (counter-clockwise seen from outside):
+/// - closed mesh: the enclosed volume, or its complement if the normals point inwards (the
+///   wall of a cavity);
+/// - open mesh (one-sided scan, terrain): the side behind the oriented surface, as far as
+///   it is defined; beyond the border the sign is unreliable, so results whose ball reaches
+///   the border are masked (invariants/volume_sphere.h).
+/// Signs come from angle-weighted pseudo-normals of the closest triangle feature
+/// (Baerentzen & Aanaes), exact for consistently oriented meshes, and are propagated beyond
+/// the band by OpenVDB's signed flood fill.
+
+#include <msii/core/progress.h>
+#include <msii/mesh/trimesh.h>
+
+#include <memory>
+
+namespace msii {
+
+struct LevelSetOptions {
+    double voxelSize = 0;   ///< voxel edge length in mesh units; must be > 0
+    double halfWidth = 3;   ///< half width of the narrow band, in voxels (>= 2)
+};
+
+struct LevelSetInfo {
+    double voxelSize = 0;          ///< as requested
+    double halfWidth = 0;          ///< in voxels
+    std::size_t activeVoxels = 0;  ///< voxels of the narrow band
+    std::size_t memoryBytes = 0;   ///< grid memory
+};
+
+class LevelSet {
+public:
+    struct Impl;
+
+    LevelSet();
+    explicit LevelSet(std::unique_ptr<Impl> impl);
+    ~LevelSet();
+    LevelSet(LevelSet&&) noexcept;
+    LevelSet& operator=(LevelSet&&) noexcept;
+
+    const LevelSetInfo& info() const;
+    /// Signed distance at a world position (trilinear). Beyond the band the magnitude is
+    /// clamped to the band half width; the sign stays meaningful.
+    double signedDistance(const Vec3& world) const;
+
+    const Impl& impl() const { return *mImpl; }
+
+private:
+    std::unique_ptr<Impl> mImpl;
+};
+
+/// Builds the narrow-band signed distance field of @p mesh.
+/// @pre @p mesh outlives the returned LevelSet (it answers exact distance queries off the
+///      band from the mesh itself).
+/// @pre the mesh passed checkMesh() (finite points, no degenerate faces) and is
+///      consistently oriented.
+/// @throw InvalidInputError for a non-positive voxel size or a grid that would be absurdly
+///        large (more than ~2^31 voxels along an axis).
+LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options,
+                       Progress* progress = nullptr);
+
+} // namespace msii

@@ -1,0 +1,126 @@
+#include <msii/invariants/compute.h>
+
+#include <msii/core/errors.h>
+#include <msii/invariants/scales.h>
+#include <msii/levelset/levelset.h>
+#include <msii/mesh/border_distance.h>
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+namespace msii {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t0)
+{
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+} // namespace
+
+double chooseVoxelSize(double medianEdge, const std::vector<double>& radii,
+                       double minVoxelsPerRadius)
+{
+    double first = radii.back();
+    for (double r : radii)
+        if (r >= 3.0 * medianEdge) {
+            first = r;
+            break;
+        }
+    return std::max(0.5 * medianEdge, first / minVoxelsPerRadius);
+}
+
+ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Progress* progress)
+{
+    const auto tStart = Clock::now();
+    if (!(options.radius > 0) || !std::isfinite(options.radius))
+        throw InvalidInputError("the radius must be a positive number");
+    if (options.scales < 1) throw InvalidInputError("the number of scales must be at least 1");
+    if (options.scales > 256)
+        throw InvalidInputError("at most 256 scales are supported (16 is usual)");
+    if (options.voxelSize < 0 || !std::isfinite(options.voxelSize))
+        throw InvalidInputError("the voxel size must be positive (or 0 for automatic)");
+    if (!(options.minVoxelsPerRadius >= 1) || options.minVoxelsPerRadius > 64)
+        throw InvalidInputError("the precision must be between 1 and 64 voxels per radius");
+    if (mesh.numVertices() == 0) throw InvalidInputError("the mesh has no vertices");
+    if (mesh.numTriangles() == 0) throw InvalidInputError("the mesh has no faces");
+
+    ComputeResult result;
+    auto t0 = Clock::now();
+    result.check = checkMesh(mesh);
+    if (result.check.numNonFinitePoints > 0) throw InvalidInputError(result.check.firstProblem());
+    if (options.repair &&
+        (result.check.numDegenerateFaces > 0 || result.check.numDuplicateFaces > 0)) {
+        result.removedFaces = removeBadFaces(mesh, result.check);
+        std::ostringstream msg;
+        msg << "removed " << result.removedFaces << " degenerate or duplicate faces";
+        result.warnings.push_back(msg.str());
+        if (mesh.numTriangles() == 0) throw InvalidInputError("the mesh has no usable faces");
+        result.check = checkMesh(mesh);
+    }
+    if (const std::string problem = result.check.firstProblem(); !problem.empty())
+        throw InvalidInputError(problem);
+    if (result.check.numInconsistentEdges > 0) {
+        std::ostringstream msg;
+        msg << "the mesh is not consistently oriented (" << result.check.numInconsistentEdges
+            << " edges are traversed the same way by both their faces), so its inside is "
+               "undefined; re-orient the faces coherently first";
+        throw InvalidInputError(msg.str());
+    }
+    result.stats = computeMeshStats(mesh);
+    result.timings.check = secondsSince(t0);
+
+    const std::vector<double> radii = equidistantRadii(options.radius, options.scales);
+    const double diagonal = result.stats.diagonal;
+    if (options.radius > 10.0 * diagonal) {
+        std::ostringstream msg;
+        msg << "the radius " << options.radius << " is more than 10 times the mesh's size ("
+            << diagonal << "); use a radius about the size of the largest feature";
+        throw InvalidInputError(msg.str());
+    }
+    result.voxelSize = options.voxelSize > 0
+                           ? options.voxelSize
+                           : chooseVoxelSize(result.stats.medianEdge, radii,
+                                             options.minVoxelsPerRadius);
+    // A grid beyond ~2e9 surface voxels would not fit in memory: say so instead of trying.
+    const double surfaceVoxels = result.stats.area / (result.voxelSize * result.voxelSize);
+    if (surfaceVoxels > 2e9) {
+        std::ostringstream msg;
+        msg << "the voxel size " << result.voxelSize << " is far too small for a surface of area "
+            << result.stats.area;
+        throw InvalidInputError(msg.str());
+    }
+    if (radii.front() < result.stats.medianEdge) {
+        std::ostringstream msg;
+        msg << "the smallest radius (" << radii.front() << ") is below the median edge length ("
+            << result.stats.medianEdge << "): its values carry little information (paper §3)";
+        result.warnings.push_back(msg.str());
+    }
+
+    t0 = Clock::now();
+    LevelSetOptions lsOptions;
+    lsOptions.voxelSize = result.voxelSize;
+    lsOptions.halfWidth = 3;
+    const LevelSet levelSet = buildLevelSet(mesh, lsOptions, progress);
+    result.bandHalfWidth = lsOptions.halfWidth;
+    result.levelSetVoxels = levelSet.info().activeVoxels;
+    result.levelSetBytes = levelSet.info().memoryBytes;
+    result.timings.levelSet = secondsSince(t0);
+
+    VolumeSphereOptions vsOptions;
+    vsOptions.radii = radii;
+    vsOptions.minVoxelsPerRadius = options.minVoxelsPerRadius;
+    vsOptions.computeSphere = options.computeSphere;
+    if (!result.check.closed)
+        vsOptions.borderDistance =
+            borderDistance(mesh, result.check.borderEdges, 2.0 * options.radius);
+    result.invariants = computeVolumeSphere(mesh, levelSet, vsOptions, progress);
+    result.timings.occupancy = result.invariants.occupancySeconds;
+    result.timings.stencils = result.invariants.stencilSeconds;
+    result.timings.interpolation = result.invariants.interpolationSeconds;
+    result.timings.total = secondsSince(tStart);
+    return result;
+}
+
+} // namespace msii

@@ -1,0 +1,46 @@
+#pragma once
+// Private to the engine: exact signed distance from a point to a consistently oriented
+// triangle mesh, found by descending over the mesh from a nearby start triangle.
+#include <msii/mesh/trimesh.h>
+
+#include <cstdint>
+#include <mutex>
+#include <vector>
+
+namespace msii::detail {
+
+class MeshDistance {
+public:
+    /// Keeps a reference: @p mesh must outlive this object.
+    explicit MeshDistance(const TriMesh& mesh);
+
+    /// Signed distance (negative inside the solid) from @p x to the mesh. Starts at the
+    /// triangles of vertex @p startVertex (or at @p face if startVertex < 0) and moves to
+    /// neighbouring triangles while they are closer: exact when the closest triangle is
+    /// reached by such a descent, which holds for points within the local feature size.
+    /// @param face  in: start face (used when startVertex < 0); out: the closest face
+    double signedDistance(const Vec3& x, std::int64_t startVertex, std::uint32_t& face) const;
+
+    /// As signedDistance(), then made exact whatever the shape (sharp edges and corners give
+    /// the descent local minima): every triangle within the descent's distance is checked,
+    /// through a uniform grid of triangles built on first use with the given cell size.
+    double exactSignedDistance(const Vec3& x, std::int64_t startVertex, double cellSize) const;
+
+private:
+    double faceDistance(const Vec3& x, std::uint32_t f, Vec3& closest, int& feature) const;
+    Vec3 pseudoNormal(std::uint32_t f, int feature) const;
+
+    void buildGrid(double cellSize) const;
+    std::uint64_t cellKey(std::int64_t x, std::int64_t y, std::int64_t z) const;
+
+    const TriMesh& mMesh;
+    mutable std::once_flag mGridOnce;
+    mutable double mCell = 0;
+    mutable std::vector<std::uint64_t> mCellKeys;     // sorted unique cells
+    mutable std::vector<std::uint32_t> mCellFirst;    // CSR into mCellTris
+    mutable std::vector<std::uint32_t> mCellTris;
+    std::vector<Vec3> mFaceNormal, mVertexNormal;
+    std::vector<std::uint32_t> mFirst, mFaces;  // vertex -> incident faces (CSR)
+};
+
+} // namespace msii::detail
