@@ -234,15 +234,15 @@ inline openvdb::Vec3d fineIndexOf(const Coord& c, int level)
 }
 
 /// The value a voxel centre at signed distance x·r from the surface would have on the
-/// surface itself. To first order in the mean curvature H, V̂(x) = V̂₀ − 3x/4 + x³/4 +
-/// (3Hr/8)·x² (the plane's cap volume plus the change of the cut area with the offset), and
-/// since V̂₀ = 1/2 − 3Hr/16 the curvature term is 2(1/2 − V̂₀)·x²: solved for V̂₀.
+/// surface itself, by the plane model: a ball whose centre is x·r outside a plane holds
+/// V̂(x) = 1/2 − 3x/4 + x³/4 of its volume (cap volume). A curvature term (±H r x²) was
+/// tried and made the sphere tests worse, so it is not applied.
 inline double surfaceVolume(double value, double x)
 {
     return value + 0.75 * x - 0.25 * x * x * x;
 }
 
-/// As surfaceVolume() for Ŝ(x) = Ŝ₀ − x/2 + (Hr/4)·x², with Ŝ₀ = 1/2 − Hr/4.
+/// As surfaceVolume() for the sphere area: Ŝ(x) = (1 − x)/2 for a plane.
 inline double surfaceSphere(double value, double x)
 {
     return value + 0.5 * x;
