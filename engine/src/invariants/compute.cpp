@@ -101,7 +101,7 @@ ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Pr
     t0 = Clock::now();
     LevelSetOptions lsOptions;
     lsOptions.voxelSize = result.voxelSize;
-    lsOptions.halfWidth = 3;
+    lsOptions.halfWidth = 2;  // occupancy reads φ within 1 voxel and its neighbours'
     const LevelSet levelSet = buildLevelSet(mesh, lsOptions, progress);
     result.bandHalfWidth = lsOptions.halfWidth;
     result.levelSetVoxels = levelSet.info().activeVoxels;

@@ -2,6 +2,7 @@
 
 #include "../levelset/levelset_impl.h"
 #include "cube_fraction.h"
+#include "../levelset/tile_sides.h"
 
 #include <msii/core/errors.h>
 
@@ -14,9 +15,12 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <array>
+#include <memory>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 
 namespace msii {
 
@@ -75,7 +79,10 @@ FloatTree::Ptr occupancyFromDistance(const openvdb::FloatGrid& sdf)
         for (auto it = leaf.beginValueAll(); it; ++it) {
             const Coord ijk = it.getCoord();
             const double phi = acc.getValue(ijk);
-            if (!it.isValueOn() || std::abs(phi) >= 1.5 * h) {
+            // A voxel farther than 0.95 h from the surface is wholly on one side (the cube's
+            // half diagonal 0.87 h plus the largest curvature term h/12), so only voxels
+            // within h need φ's neighbours, which a band of half width 2 holds exactly.
+            if (!it.isValueOn() || std::abs(phi) >= h) {
                 it.setValue(phi < 0 ? -0.5f : 0.5f);
                 continue;
             }
@@ -108,118 +115,187 @@ FloatTree::Ptr occupancyFromDistance(const openvdb::FloatGrid& sdf)
     return q;
 }
 
-/// Level l+1 from level l: mean of the 2×2×2 children (exact for volume fractions).
+/// Level l+1 from level l: mean of the 2×2×2 children (exact for volume fractions). Every
+/// voxel of every coarse leaf is computed from the fine tree (whose tiles carry their side),
+/// so no coarse voxel's side has to be guessed; the coarse tree's tiles get theirs from its
+/// leaves afterwards (detail::fillTileSides).
 FloatTree::Ptr restrictOccupancy(const FloatTree& fine)
 {
-    std::vector<const FloatTree::LeafNodeType*> leafs;
-    leafs.reserve(fine.leafCount());
-    for (auto it = fine.cbeginLeaf(); it; ++it) leafs.push_back(it.getLeaf());
-    std::vector<std::array<float, 64>> coarseValues(leafs.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leafs.size()), [&](const auto& r) {
+    using Leaf = FloatTree::LeafNodeType;
+    std::vector<Coord> origins;
+    origins.reserve(fine.leafCount());
+    for (auto it = fine.cbeginLeaf(); it; ++it) {
+        const Coord o = it->origin();
+        origins.push_back(Coord(o.x() >> 1, o.y() >> 1, o.z() >> 1) & ~(Leaf::DIM - 1));
+    }
+    std::sort(origins.begin(), origins.end());
+    origins.erase(std::unique(origins.begin(), origins.end()), origins.end());
+
+    std::vector<std::unique_ptr<Leaf>> leafs(origins.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, origins.size()), [&](const auto& r) {
+        openvdb::tree::ValueAccessor<const FloatTree> acc(fine);
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            const auto& leaf = *leafs[i];
-            for (int x = 0; x < 4; ++x)
-                for (int y = 0; y < 4; ++y)
-                    for (int z = 0; z < 4; ++z) {
-                        double sum = 0;
-                        for (int c = 0; c < 8; ++c)
-                            sum += leaf.getValue(FloatTree::LeafNodeType::coordToOffset(
-                                leaf.origin() + Coord(2 * x + (c & 1), 2 * y + ((c >> 1) & 1),
-                                                      2 * z + (c >> 2))));
-                        coarseValues[i][(x * 4 + y) * 4 + z] = float(sum / 8.0);
-                    }
+            auto leaf = std::make_unique<Leaf>(origins[i], 0.5f, /*active=*/true);
+            for (auto it = leaf->beginValueAll(); it; ++it) {
+                const Coord f = it.getCoord() << 1;
+                double sum = 0;
+                for (int c = 0; c < 8; ++c)
+                    sum += acc.getValue(f.offsetBy(c & 1, (c >> 1) & 1, c >> 2));
+                it.setValue(float(sum / 8.0));
+            }
+            leafs[i] = std::move(leaf);
         }
     });
     auto coarse = std::make_shared<FloatTree>(0.5f);
-    auto acc = openvdb::tree::ValueAccessor<FloatTree>(*coarse);
-    for (std::size_t i = 0; i < leafs.size(); ++i) {
-        const Coord origin(leafs[i]->origin().x() >> 1, leafs[i]->origin().y() >> 1,
-                           leafs[i]->origin().z() >> 1);
-        for (int x = 0; x < 4; ++x)
-            for (int y = 0; y < 4; ++y)
-                for (int z = 0; z < 4; ++z)
-                    acc.setValueOn(origin.offsetBy(x, y, z), coarseValues[i][(x * 4 + y) * 4 + z]);
-    }
-    openvdb::tools::signedFloodFillWithValues(*coarse, 0.5f, -0.5f);
+    for (auto& leaf : leafs) coarse->addLeaf(leaf.release());
     return coarse;
 }
 
-// ---------------------------------------------------------------------------------------
-// Stencils: anti-aliased ball weights for V and shell weights for S, for the radii of one
-// level, laid out for a dense block of (8 + 2·reach)^3 voxels (z fastest).
+/// Gives every leaf-sized block of the level-@p level tree @p coarse inside @p fineBox
+/// (fine index space) that is not a leaf the side of the fine tree at the block's centre
+/// (the block then holds only fine tiles, all on one side).
+void copyTileSides(FloatTree& coarse, const FloatTree& fine, int level,
+                   const openvdb::CoordBBox& fineBox)
+{
+    using Leaf = FloatTree::LeafNodeType;
+    const int shift = level + Leaf::LOG2DIM;
+    const Coord lo(fineBox.min().x() >> shift, fineBox.min().y() >> shift, fineBox.min().z() >> shift);
+    const Coord hi(fineBox.max().x() >> shift, fineBox.max().y() >> shift, fineBox.max().z() >> shift);
+    openvdb::tree::ValueAccessor<const FloatTree> fineAcc(fine);
+    openvdb::tree::ValueAccessor<FloatTree> acc(coarse);
+    const int half = (Leaf::DIM << level) / 2;
+    for (int x = lo.x(); x <= hi.x(); ++x)
+        for (int y = lo.y(); y <= hi.y(); ++y)
+            for (int z = lo.z(); z <= hi.z(); ++z) {
+                const Coord origin(x << Leaf::LOG2DIM, y << Leaf::LOG2DIM, z << Leaf::LOG2DIM);
+                if (acc.probeConstLeaf(origin)) continue;
+                const Coord centre((x << shift) + half, (y << shift) + half, (z << shift) + half);
+                acc.addTile(1, origin, fineAcc.getValue(centre) < 0 ? -0.5f : 0.5f, false);
+            }
+}
 
-constexpr int kLanes = 8;  // radii are processed in groups of 8 (vectorisable inner loop)
+// ---------------------------------------------------------------------------------------
+// Stencils: anti-aliased ball weights for V and shell weights for S (Eq. 1 and 3 of the
+// paper as voxel sums), for all radii of one level at once.
+//
+// Entries are grouped by their squared distance n = x² + y² + z² from the centre; all
+// entries of a group share one weight per radius (the mean of their exact voxel ∩ ball
+// fractions, so each stencil's total is unchanged). A node's sums are then
+//     V_j = Σ_groups wV[group][j] · (Σ_{entries e in group} occupancy(node + e)),
+// so every entry costs one addition whatever the number of radii, and the group sums for
+// eight nodes in a row are computed together as eight consecutive floats.
+
+constexpr int kRow = 8;  // nodes per row = the leaf node's edge
+using Row = float __attribute__((vector_size(kRow * sizeof(float))));
+
+/// Adds the kRow floats at @p p (unaligned) to @p sum. (Not a function returning a Row:
+/// that would change the calling convention with and without AVX.)
+inline void addRow(Row& sum, const float* p)
+{
+    Row r;
+    std::memcpy(&r, p, sizeof(Row));
+    sum += r;
+}
 
 struct Stencil {
-    int reach = 0;                 // voxels beyond the 8^3 block that the stencil reads
-    int side = 0;                  // 8 + 2·reach
-    int numRadii = 0, numGroups = 0;
-    std::vector<std::int32_t> offsets;  // per entry: linear offset in the dense block
-    std::vector<float> wV, wS;          // per entry: numGroups·kLanes weights
-    std::vector<double> sumV, sumS;     // per radius: the stencil's own total (normaliser)
+    int reach = 0;      // voxels beyond the 8^3 block that the stencil reads
+    int side = 0;       // 8 + 2·reach: edge of the dense block copied per leaf
+    int numRadii = 0;
+    /// Per fastest axis (0 = x, 1 = y, 2 = z) of the dense block: the entries' linear
+    /// offsets, ordered by group.
+    std::array<std::vector<std::int32_t>, 3> offsets;
+    std::vector<std::uint32_t> groupFirst;  // groups' ranges in offsets (size numGroups + 1)
+    std::vector<float> wV, wS;              // per group: numRadii weights
+    std::vector<double> sumV, sumS;         // per radius: the stencil's own total
+    std::size_t numGroups() const { return groupFirst.size() - 1; }
 };
 
 Stencil makeStencil(const std::vector<double>& rho)  // radii in voxels of the level
 {
     Stencil st;
-    st.numRadii = int(rho.size());
-    st.numGroups = (st.numRadii + kLanes - 1) / kLanes;
-    const double rhoMax = rho.back() + kShellHalfWidth;
-    st.reach = int(std::ceil(rhoMax + 1.0));
-    st.side = 8 + 2 * st.reach;
-    st.sumV.assign(st.numRadii, 0.0);
-    st.sumS.assign(st.numRadii, 0.0);
-    const int width = st.numGroups * kLanes;
-    std::vector<float> v(width), s(width);
-    for (int x = -st.reach; x <= st.reach; ++x)
-        for (int y = -st.reach; y <= st.reach; ++y)
-            for (int z = -st.reach; z <= st.reach; ++z) {
-                std::fill(v.begin(), v.end(), 0.f);
-                std::fill(s.begin(), s.end(), 0.f);
-                bool any = false;
-                for (int j = 0; j < st.numRadii; ++j) {
-                    const double ball = detail::ballFraction(x, y, z, rho[j]);
-                    const double shell =
-                        detail::ballFraction(x, y, z, rho[j] + kShellHalfWidth) -
-                        detail::ballFraction(x, y, z, rho[j] - kShellHalfWidth);
-                    v[j] = float(ball);
-                    s[j] = float(shell);
-                    st.sumV[j] += v[j];
-                    st.sumS[j] += s[j];
-                    any = any || ball > 0 || shell > 0;
-                }
-                if (!any) continue;
-                st.offsets.push_back((x * st.side + y) * st.side + z);
-                st.wV.insert(st.wV.end(), v.begin(), v.end());
-                st.wS.insert(st.wS.end(), s.begin(), s.end());
+    const int nr = int(rho.size());
+    st.numRadii = nr;
+    st.reach = int(std::ceil(rho.back() + kShellHalfWidth + 1.0));
+    st.side = kRow + 2 * st.reach;
+    st.sumV.assign(nr, 0.0);
+    st.sumS.assign(nr, 0.0);
+
+    // Entries by squared distance.
+    const int reach = st.reach;
+    std::vector<std::vector<std::array<int, 3>>> byDistance(std::size_t(3 * reach * reach) + 1);
+    for (int x = -reach; x <= reach; ++x)
+        for (int y = -reach; y <= reach; ++y)
+            for (int z = -reach; z <= reach; ++z)
+                byDistance[std::size_t(x * x + y * y + z * z)].push_back({x, y, z});
+
+    const int side = st.side;
+    const auto offset = [side](int a, int b, int c) { return std::int32_t((a * side + b) * side + c); };
+    std::vector<double> v(nr), sh(nr);
+    bool interiorOpen = false;  // the last group is the merged interior (all V = 1, S = 0)
+    for (const auto& group : byDistance) {
+        if (group.empty()) continue;
+        std::fill(v.begin(), v.end(), 0.0);
+        std::fill(sh.begin(), sh.end(), 0.0);
+        for (const auto& e : group)
+            for (int j = 0; j < nr; ++j) {
+                v[j] += detail::ballFraction(e[0], e[1], e[2], rho[j]);
+                sh[j] += detail::ballFraction(e[0], e[1], e[2], rho[j] + kShellHalfWidth) -
+                         detail::ballFraction(e[0], e[1], e[2], rho[j] - kShellHalfWidth);
             }
+        bool any = false, interior = true;
+        for (int j = 0; j < nr; ++j) {
+            st.sumV[j] += v[j];
+            st.sumS[j] += sh[j];
+            v[j] /= double(group.size());
+            sh[j] /= double(group.size());
+            any = any || v[j] > 0 || sh[j] > 0;
+            interior = interior && v[j] == 1.0 && sh[j] == 0.0;
+        }
+        if (!any) continue;
+        if (!(interior && interiorOpen)) {  // start a new group (else extend the interior)
+            st.groupFirst.push_back(std::uint32_t(st.offsets[0].size()));
+            for (int j = 0; j < nr; ++j) {
+                st.wV.push_back(float(v[j]));
+                st.wS.push_back(float(sh[j]));
+            }
+        }
+        interiorOpen = interior;
+        for (const auto& e : group) {
+            st.offsets[0].push_back(offset(e[1], e[2], e[0]));  // x fastest
+            st.offsets[1].push_back(offset(e[0], e[2], e[1]));  // y fastest
+            st.offsets[2].push_back(offset(e[0], e[1], e[2]));  // z fastest
+        }
+    }
+    st.groupFirst.push_back(std::uint32_t(st.offsets[0].size()));
     return st;
 }
 
-/// Stencil sums at one voxel centre: acc[0..numGroups·kLanes) for V and S.
-inline void applyStencil(const Stencil& st, const float* occupancy, float* accV, float* accS)
+/// Stencil sums for the kRow nodes of a row that starts at @p row in the dense block whose
+/// fastest axis runs along the row: V and S per radius, each a Row (one value per node).
+inline void applyStencil(const Stencil& st, const std::vector<std::int32_t>& offsets,
+                         const float* row, Row* groupSum, Row* sumV, Row* sumS)
 {
-    const int width = st.numGroups * kLanes;
-    for (int l = 0; l < width; ++l) accV[l] = accS[l] = 0.f;
-    const std::size_t n = st.offsets.size();
-    const float* wV = st.wV.data();
-    const float* wS = st.wS.data();
-    for (std::size_t e = 0; e < n; ++e) {
-        const float o = occupancy[st.offsets[e]];
-        if (o == 0.f) {
-            wV += width;
-            wS += width;
-            continue;
+    const std::size_t ng = st.numGroups();
+    const std::int32_t* off = offsets.data();
+    for (std::size_t g = 0; g < ng; ++g) {
+        Row a0 = Row{}, a1 = Row{};
+        std::uint32_t e = st.groupFirst[g];
+        const std::uint32_t end = st.groupFirst[g + 1];
+        for (; e + 1 < end; e += 2) {
+            addRow(a0, row + off[e]);
+            addRow(a1, row + off[e + 1]);
         }
-        for (int g = 0; g < st.numGroups; ++g) {
-            float* aV = accV + g * kLanes;
-            float* aS = accS + g * kLanes;
-            for (int l = 0; l < kLanes; ++l) {
-                aV[l] += o * wV[l];
-                aS[l] += o * wS[l];
-            }
-            wV += kLanes;
-            wS += kLanes;
+        if (e < end) addRow(a0, row + off[e]);
+        groupSum[g] = a0 + a1;
+    }
+    const int nr = st.numRadii;
+    for (int j = 0; j < nr; ++j) sumV[j] = sumS[j] = Row{};
+    for (std::size_t g = 0; g < ng; ++g) {
+        const float* wv = st.wV.data() + g * nr;
+        const float* ws = st.wS.data() + g * nr;
+        for (int j = 0; j < nr; ++j) {
+            sumV[j] += wv[j] * groupSum[g];
+            sumS[j] += ws[j] * groupSum[g];
         }
     }
 }
@@ -291,10 +367,26 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
 
     auto t0 = Clock::now();
     if (progress) progress->start("occupancy", std::size_t(numLevels));
+    // Tiles within reach of any vertex's stencil get their side from the band on the fine
+    // level (blocks of 8 fine voxels), and coarse tiles copy the fine side: coarse blocks
+    // are 2^l times larger, too coarse to tell sides apart near an open border.
+    openvdb::CoordBBox vertexBox;
+    for (const auto& u : fineIndex) vertexBox.expand(Coord::floor(u));
+    int finePad = 0;
+    for (int l = 0; l < numLevels; ++l) {
+        double rhoMax = 0;
+        for (int j : plan.radiiOf[l]) rhoMax = std::max(rhoMax, radii[j] / (h0 * (1 << l)));
+        finePad = std::max(finePad, (int(std::ceil(rhoMax)) + 12) << l);
+    }
+    openvdb::CoordBBox fineBox = vertexBox;
+    fineBox.expand(finePad);
     std::vector<FloatTree::Ptr> occupancy{occupancyFromDistance(sdf)};
+    detail::fillTileSides(*occupancy.back(), fineBox, 0.5f, -0.5f,
+                          levelSet.impl().guessedSide.get());
     if (progress) progress->advance();
     for (int l = 1; l < numLevels; ++l) {
         occupancy.push_back(restrictOccupancy(*occupancy.back()));
+        copyTileSides(*occupancy.back(), *occupancy.front(), l, fineBox);
         if (progress) progress->advance();
     }
     if (progress) progress->end();
@@ -307,7 +399,6 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
         std::vector<double> rho;
         for (int j : levelRadii) rho.push_back(radii[j] / hl);
         const Stencil stencil = makeStencil(rho);
-        const int width = stencil.numGroups * kLanes;
         const int nr = stencil.numRadii;
 
         // Voxel centres needed: the 8 corners of the level's cell around each vertex.
@@ -341,79 +432,146 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
             }
         result.numNodes += std::size_t(numNodes);
 
-        // Stencil sums at every needed voxel centre, block by block.
+        // Stencil sums at every needed voxel centre, block by block: the block's occupancy
+        // is copied densely with the axis along which its nodes fill the fewest rows as the
+        // fastest one, and the stencil is applied row by row.
         std::vector<float> nodeV(std::size_t(numNodes) * nr), nodeS(std::size_t(numNodes) * nr);
         std::vector<float> nodePhi(numNodes);
         const FloatTree& occ = *occupancy[level];
-        const std::size_t denseSize = std::size_t(stencil.side) * stencil.side * stencil.side;
-        tbb::enumerable_thread_specific<std::vector<float>> buffers(
-            [&] { return std::vector<float>(denseSize); });
+        const int side = stencil.side;
+        const std::size_t denseSize = std::size_t(side) * side * side;
+        struct Scratch {
+            std::vector<float> zyx, buffer;
+            std::vector<Row> groupSum, sumV, sumS;
+        };
+        tbb::enumerable_thread_specific<Scratch> scratch([&] {
+            return Scratch{std::vector<float>(denseSize), std::vector<float>(denseSize),
+                           std::vector<Row>(stencil.numGroups()), std::vector<Row>(nr),
+                           std::vector<Row>(nr)};
+        });
         if (progress) progress->start("V and S, level " + std::to_string(level), blocks.size());
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 4), [&](const auto& r) {
-            auto& buffer = buffers.local();
-            std::vector<float> accV(width), accS(width);
+            Scratch& sc = scratch.local();
             openvdb::tree::ValueAccessor<const FloatTree> sdfAcc(sdf.tree());
             for (std::size_t b = r.begin(); b < r.end(); ++b) {
                 const Int32Tree::LeafNodeType& leaf = *blocks[b];
-                const Coord lo = leaf.origin().offsetBy(-stencil.reach);
-                const CoordBBox box(lo, lo.offsetBy(stencil.side - 1));
-                openvdb::tools::Dense<float, openvdb::tools::LayoutZYX> dense(box, buffer.data());
-                openvdb::tools::copyToDense(occ, dense, /*serial=*/true);
-                for (float& v : buffer) v = 0.5f - v;
+                // Rows needed along each axis.
+                std::array<std::uint64_t, 3> rowMask{0, 0, 0};
                 for (auto it = leaf.cbeginValueOn(); it; ++it) {
-                    const Coord local = it.getCoord() - lo;
-                    const float* centre =
-                        buffer.data() + (std::size_t(local.x()) * stencil.side + local.y()) *
-                                            stencil.side + local.z();
-                    applyStencil(stencil, centre, accV.data(), accS.data());
-                    const std::size_t n = std::size_t(it.getValue());
-                    for (int j = 0; j < nr; ++j) {
-                        nodeV[n * nr + j] = float(accV[j] / stencil.sumV[j]);
-                        nodeS[n * nr + j] = float(accS[j] / stencil.sumS[j]);
-                    }
-                    // Signed distance of the voxel centre, for the plane correction: on the
-                    // fine level straight from the (exact) band, on coarser ones from the mesh.
-                    if (level == 0) {
-                        nodePhi[n] = sdfAcc.getValue(it.getCoord());
-                    } else {
-                        const openvdb::Vec3d w =
-                            sdf.transform().indexToWorld(fineIndexOf(it.getCoord(), level));
-                        nodePhi[n] = float(levelSet.impl().distance->exactSignedDistance(
-                            Vec3(w.x(), w.y(), w.z()), seedVertex[n], 2.0 * h0));
-                    }
+                    const Coord c = it.getCoord() - leaf.origin();
+                    rowMask[0] |= std::uint64_t(1) << (c.y() * 8 + c.z());
+                    rowMask[1] |= std::uint64_t(1) << (c.x() * 8 + c.z());
+                    rowMask[2] |= std::uint64_t(1) << (c.x() * 8 + c.y());
                 }
+                int axis = 2;
+                for (int a = 0; a < 2; ++a)
+                    if (__builtin_popcountll(rowMask[a]) < __builtin_popcountll(rowMask[axis])) axis = a;
+
+                const Coord lo = leaf.origin().offsetBy(-stencil.reach);
+                const CoordBBox box(lo, lo.offsetBy(side - 1));
+                openvdb::tools::Dense<float, openvdb::tools::LayoutZYX> dense(box, sc.zyx.data());
+                openvdb::tools::copyToDense(occ, dense, /*serial=*/true);
+                // Occupancy = 1/2 − q, laid out with `axis` fastest.
+                const std::size_t s2 = std::size_t(side) * side;
+                for (std::size_t x = 0; x < std::size_t(side); ++x)
+                    for (std::size_t y = 0; y < std::size_t(side); ++y)
+                        for (std::size_t z = 0; z < std::size_t(side); ++z) {
+                            const float o = 0.5f - sc.zyx[x * s2 + y * side + z];
+                            const std::size_t at = axis == 2 ? x * s2 + y * side + z
+                                                 : axis == 1 ? x * s2 + z * side + y
+                                                             : y * s2 + z * side + x;
+                            sc.buffer[at] = o;
+                        }
+
+                const auto& offsets = stencil.offsets[axis];
+                for (int u = 0; u < 8; ++u)
+                    for (int v = 0; v < 8; ++v) {
+                        if (!((rowMask[axis] >> (u * 8 + v)) & 1)) continue;
+                        // The row's first node in the dense block (slow, middle, fast axes).
+                        const std::size_t start =
+                            (std::size_t(u + stencil.reach) * side + std::size_t(v + stencil.reach)) *
+                                side + std::size_t(stencil.reach);
+                        applyStencil(stencil, offsets, sc.buffer.data() + start, sc.groupSum.data(),
+                                     sc.sumV.data(), sc.sumS.data());
+                        for (int t = 0; t < kRow; ++t) {
+                            const Coord local = axis == 2 ? Coord(u, v, t)
+                                              : axis == 1 ? Coord(u, t, v)
+                                                          : Coord(t, u, v);
+                            const Coord ijk = leaf.origin() + local;
+                            if (!leaf.isValueOn(ijk)) continue;
+                            const std::size_t n = std::size_t(leaf.getValue(ijk));
+                            for (int j = 0; j < nr; ++j) {
+                                nodeV[n * nr + j] = float(sc.sumV[j][t] / stencil.sumV[j]);
+                                nodeS[n * nr + j] = float(sc.sumS[j][t] / stencil.sumS[j]);
+                            }
+                            // Signed distance of the voxel centre, for the surface correction:
+                            // on the fine level straight from the (exact) band, on coarser
+                            // ones from the mesh.
+                            if (level == 0) {
+                                nodePhi[n] = sdfAcc.getValue(ijk);
+                            } else {
+                                const openvdb::Vec3d w =
+                                    sdf.transform().indexToWorld(fineIndexOf(ijk, level));
+                                nodePhi[n] = float(levelSet.impl().distance->exactSignedDistance(
+                                    Vec3(w.x(), w.y(), w.z()), seedVertex[n], 2.0 * h0));
+                            }
+                        }
+                    }
                 if (progress) progress->advance();
             }
         });
         if (progress) progress->end();
         result.stencilSeconds += secondsSince(t0);
 
-        // Back to the vertices: trilinear interpolation of the plane-corrected values.
+        // Back to the vertices: trilinear interpolation of surface-corrected node values.
+        // A node at signed distance x·r from the surface is moved onto it with the plane
+        // model (surfaceVolume/surfaceSphere). The node's distance is modelled as
+        // ψ = n·d + κ/2·|d_t|² (vertex normal n, offset d = node − vertex, d_t its tangential
+        // part), with κ fitted to the nodes' exact distances and capped at 1/r: V̂ and Ŝ are
+        // averages over a ball of radius r, so the field they form cannot bend more sharply
+        // than that, and sharp edges and corners (where the exact distance is a cone and
+        // would imply κ ≈ 1/h) must not be corrected as if they were smooth. The linear part
+        // n·d vanishes at the vertex under trilinear interpolation, so n's error matters
+        // only through the curvature term.
         t0 = Clock::now();
-        const double margin = 2.75 * hl + 2.0 * h0;
+        const double margin = 4.0 * hl + 2.0 * h0;
+        const auto& distance = *levelSet.impl().distance;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
             openvdb::tree::ValueAccessor<const Int32Tree> acc(nodes);
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                const Vec3& n = distance.vertexNormal(i);
                 std::array<std::int32_t, 8> idx;
-                std::array<double, 8> w;
+                std::array<double, 8> w, along, tangential2;
+                double num = 0, den = 0;
                 for (int c = 0; c < 8; ++c) {
-                    idx[c] = acc.getValue(base[i].offsetBy(c & 1, (c >> 1) & 1, c >> 2));
-                    const double fx = (c & 1) ? frac[i][0] : 1.0 - frac[i][0];
-                    const double fy = ((c >> 1) & 1) ? frac[i][1] : 1.0 - frac[i][1];
-                    const double fz = (c >> 2) ? frac[i][2] : 1.0 - frac[i][2];
+                    const int cx = c & 1, cy = (c >> 1) & 1, cz = c >> 2;
+                    idx[c] = acc.getValue(base[i].offsetBy(cx, cy, cz));
+                    const double fx = cx ? frac[i][0] : 1.0 - frac[i][0];
+                    const double fy = cy ? frac[i][1] : 1.0 - frac[i][1];
+                    const double fz = cz ? frac[i][2] : 1.0 - frac[i][2];
                     w[c] = fx * fy * fz;
+                    const Vec3 d(hl * (cx - frac[i][0]), hl * (cy - frac[i][1]),
+                                 hl * (cz - frac[i][2]));
+                    along[c] = dot(n, d);
+                    tangential2[c] = std::max(0.0, dot(d, d) - along[c] * along[c]);
+                    const double deviation = nodePhi[std::size_t(idx[c])] - along[c];
+                    num += deviation * tangential2[c];
+                    den += tangential2[c] * tangential2[c];
                 }
+                const double kappaFit = den > 0 ? 2.0 * num / den : 0.0;
                 for (int k = 0; k < nr; ++k) {
                     const int j = levelRadii[k];
                     if (!options.borderDistance.empty() &&
                         radii[j] + margin > options.borderDistance[i])
                         continue;  // stays NaN: the ball reaches the border
+                    const double kappa = std::clamp(kappaFit, -0.5 / radii[j], 0.5 / radii[j]);
                     double v = 0, s = 0;
                     for (int c = 0; c < 8; ++c) {
-                        const std::size_t n = std::size_t(idx[c]);
-                        const double x = std::clamp(double(nodePhi[n]) / radii[j], -0.6, 0.6);
-                        v += w[c] * surfaceVolume(nodeV[n * nr + k], x);
-                        s += w[c] * surfaceSphere(nodeS[n * nr + k], x);
+                        const std::size_t m = std::size_t(idx[c]);
+                        const double psi = along[c] + 0.5 * kappa * tangential2[c];
+                        const double x = std::clamp(psi / radii[j], -0.6, 0.6);
+                        v += w[c] * surfaceVolume(nodeV[m * nr + k], x);
+                        s += w[c] * surfaceSphere(nodeS[m * nr + k], x);
                     }
                     result.volume[j][i] = float(std::clamp(v, 0.0, 1.0));
                     if (options.computeSphere) result.sphere[j][i] = float(std::clamp(s, 0.0, 1.0));

@@ -1,4 +1,5 @@
 #include "levelset_impl.h"
+#include "tile_sides.h"
 #include "mesh_distance.h"
 
 #include <msii/core/errors.h>
@@ -18,6 +19,9 @@
 namespace msii {
 
 namespace {
+
+/// Voxels around the mesh's bounding box whose tiles get their side from the band.
+constexpr int kSidePadding = 24;
 
 void initializeOpenVdb()
 {
@@ -69,12 +73,14 @@ LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options, Prog
     if (progress) progress->start("level set", 3);
     // Index space is shifted so that the mesh sits in the middle of one of OpenVDB's root
     // children (4096^3 voxels): then the signed flood fill gives every voxel near the mesh
-    // its side, with no reliance on the root background.
+    // its side, with no reliance on the root background. The shift is a multiple of 512
+    // voxels, so every level of the occupancy pyramid (cells of 2^l voxels) lies on the same
+    // world-aligned lattice whatever the mesh's extent: a part of a mesh (a tile, an open
+    // patch of a closed slab) gives the same values as the whole.
     auto transform = openvdb::math::Transform::createLinearTransform(h);
     const Vec3 centre = (lo + hi) * 0.5;
-    const openvdb::Vec3d shift(h * (std::round(centre.x / h) - 2048.0),
-                               h * (std::round(centre.y / h) - 2048.0),
-                               h * (std::round(centre.z / h) - 2048.0));
+    const auto snap = [&](double c) { return 512.0 * h * (std::round(c / (512.0 * h)) - 4.0); };
+    const openvdb::Vec3d shift(snap(centre.x), snap(centre.y), snap(centre.z));
     transform->postTranslate(shift);
     std::vector<openvdb::Vec3s> indexPoints(mesh.numVertices());
     std::vector<openvdb::Vec3I> triangles(mesh.numTriangles());
@@ -106,6 +112,9 @@ LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options, Prog
     // off by a good part of a voxel: make every band voxel exact, and signed by the
     // pseudo-normal of its closest feature.
     auto distance = std::make_shared<detail::MeshDistance>(mesh);
+    auto guessed = std::make_shared<openvdb::MaskTree>();
+    std::mutex guessMutex;
+    openvdb::tree::ValueAccessor<openvdb::MaskTree, false> guessAcc(*guessed);
     openvdb::tree::LeafManager<openvdb::FloatTree> leaves(grid->tree());
     leaves.foreach([&](openvdb::FloatTree::LeafNodeType& leaf, std::size_t) {
         auto indexAcc = closest.getConstAccessor();
@@ -115,17 +124,38 @@ LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options, Prog
             if (f < 0 || std::size_t(f) >= mesh.numTriangles()) continue;
             const openvdb::Vec3d w = transform->indexToWorld(ijk);
             std::uint32_t face = std::uint32_t(f);
-            it.setValue(float(distance->signedDistance(Vec3(w.x(), w.y(), w.z()), -1, face)));
+            bool beyondBorder = false;
+            it.setValue(float(
+                distance->signedDistance(Vec3(w.x(), w.y(), w.z()), -1, face, &beyondBorder)));
+            // Beyond an open border the side is a guess: such voxels are remembered, so that
+            // fillTileSides() does not spread their side (results there are masked anyway).
+            if (beyondBorder) {
+                std::lock_guard<std::mutex> lock(guessMutex);
+                guessAcc.setValueOn(ijk);
+            }
         }
     });
     if (progress) progress->advance();
     openvdb::tools::signedFloodFill(grid->tree());
+    {
+        // The flood fill's sides are right for leaves; tiles near the mesh get theirs from
+        // the band (detail::fillTileSides), which also holds for open, tilted sheets.
+        openvdb::CoordBBox box;
+        for (const Vec3& p : mesh.points) {
+            const openvdb::Vec3d u = transform->worldToIndex(openvdb::Vec3d(p.x, p.y, p.z));
+            box.expand(openvdb::Coord::floor(u));
+        }
+        box.expand(kSidePadding);
+        detail::fillTileSides(grid->tree(), box, grid->background(), -grid->background(),
+                              guessed.get());
+    }
     if (progress) progress->advance();
     if (progress) progress->end();
 
     auto impl = std::make_unique<LevelSet::Impl>();
     impl->grid = grid;
     impl->distance = distance;
+    impl->guessedSide = guessed;
     impl->info.voxelSize = h;
     impl->info.halfWidth = options.halfWidth;
     impl->info.activeVoxels = grid->activeVoxelCount();

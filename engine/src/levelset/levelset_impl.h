@@ -14,6 +14,8 @@ struct LevelSet::Impl {
     openvdb::FloatGrid::Ptr grid;  ///< world distance values, voxel (i,j,k) centred at (i,j,k)*h
     LevelSetInfo info;
     std::shared_ptr<const detail::MeshDistance> distance;  ///< exact distances off the band
+    /// Band voxels beyond an open border (closest feature on the border): side is a guess.
+    std::shared_ptr<const openvdb::MaskTree> guessedSide;
 };
 
 } // namespace msii

@@ -1,5 +1,7 @@
 #include "mesh_distance.h"
 
+#include <array>
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -65,6 +67,20 @@ MeshDistance::MeshDistance(const TriMesh& mesh) : mMesh(mesh)
     std::vector<std::uint32_t> fill(mFirst.begin(), mFirst.end() - 1);
     for (std::size_t f = 0; f < nf; ++f)
         for (auto v : mesh.triangles[f]) mFaces[fill[v]++] = std::uint32_t(f);
+    // Border vertices: ends of edges with one incident face.
+    mBorderVertex.assign(nv, 0);
+    for (std::size_t f = 0; f < nf; ++f) {
+        const auto& t = mesh.triangles[f];
+        for (int k = 0; k < 3; ++k) {
+            const auto u = t[k], v = t[(k + 1) % 3];
+            int count = 0;
+            for (auto i = mFirst[u]; i < mFirst[u + 1]; ++i) {
+                const auto& s = mesh.triangles[mFaces[i]];
+                count += (s[0] == v || s[1] == v || s[2] == v) ? 1 : 0;
+            }
+            if (count == 1) mBorderVertex[u] = mBorderVertex[v] = 1;
+        }
+    }
     // Angle-weighted vertex pseudo-normals (Baerentzen & Aanaes 2005).
     mVertexNormal.assign(nv, Vec3{});
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
@@ -78,7 +94,8 @@ MeshDistance::MeshDistance(const TriMesh& mesh) : mMesh(mesh)
                 const Vec3 e2 = mesh.points[t[(k + 2) % 3]] - mesh.points[v];
                 n += mFaceNormal[f] * std::atan2(norm(cross(e1, e2)), dot(e1, e2));
             }
-            mVertexNormal[v] = n;
+            const double len = norm(n);
+            mVertexNormal[v] = len > 0 ? n / len : n;  // only the direction is used
         }
     });
 }
@@ -116,7 +133,7 @@ Vec3 MeshDistance::pseudoNormal(std::uint32_t f, int feature) const
 }
 
 double MeshDistance::signedDistance(const Vec3& x, std::int64_t startVertex,
-                                    std::uint32_t& face) const
+                                    std::uint32_t& face, bool* onBorder) const
 {
     double best = std::numeric_limits<double>::infinity();
     Vec3 closest, bestPoint;
@@ -137,21 +154,48 @@ double MeshDistance::signedDistance(const Vec3& x, std::int64_t startVertex,
         }
         return improved;
     };
+    // Descend: look at every triangle sharing a vertex with the current closest one; the
+    // triangles of a vertex are looked at once (a few vertices are remembered).
+    std::array<std::uint32_t, 32> expanded;
+    std::size_t numExpanded = 0;
+    const auto expand = [&](std::uint32_t v) {
+        for (std::size_t i = 0; i < numExpanded; ++i)
+            if (expanded[i] == v) return false;
+        if (numExpanded < expanded.size()) expanded[numExpanded++] = v;
+        return tryFacesOf(v);
+    };
     if (startVertex >= 0) {
-        tryFacesOf(std::uint32_t(startVertex));
+        expand(std::uint32_t(startVertex));
     } else {
         best = faceDistance(x, face, bestPoint, bestFeature);
     }
-    // Descend: look at every triangle sharing a vertex with the current closest one.
     for (int step = 0; step < 256; ++step) {
         const auto t = mMesh.triangles[bestFace];
         bool improved = false;
-        for (auto v : t) improved = tryFacesOf(v) || improved;
+        for (auto v : t) improved = expand(v) || improved;
         if (!improved) break;
     }
     face = bestFace;
     const double d = std::sqrt(best);
-    return dot(x - bestPoint, pseudoNormal(bestFace, bestFeature)) < 0 ? -d : d;
+    const Vec3 n = pseudoNormal(bestFace, bestFeature);
+    const double along = dot(x - bestPoint, n);
+    if (onBorder) {
+        // Beyond the border: the closest feature is on it and x lies off to the side rather
+        // than in front of or behind it (the side is then a guess).
+        const auto& t = mMesh.triangles[bestFace];
+        bool border = false;
+        switch (bestFeature) {
+        case kVertexA: border = mBorderVertex[t[0]]; break;
+        case kVertexB: border = mBorderVertex[t[1]]; break;
+        case kVertexC: border = mBorderVertex[t[2]]; break;
+        case kEdgeAB: border = mBorderVertex[t[0]] && mBorderVertex[t[1]]; break;
+        case kEdgeBC: border = mBorderVertex[t[1]] && mBorderVertex[t[2]]; break;
+        case kEdgeCA: border = mBorderVertex[t[2]] && mBorderVertex[t[0]]; break;
+        default: break;
+        }
+        *onBorder = border && std::abs(along) < 0.7 * d * norm(n);
+    }
+    return along < 0 ? -d : d;
 }
 
 std::uint64_t MeshDistance::cellKey(std::int64_t x, std::int64_t y, std::int64_t z) const

@@ -19,12 +19,18 @@ public:
     /// neighbouring triangles while they are closer: exact when the closest triangle is
     /// reached by such a descent, which holds for points within the local feature size.
     /// @param face  in: start face (used when startVertex < 0); out: the closest face
-    double signedDistance(const Vec3& x, std::int64_t startVertex, std::uint32_t& face) const;
+    /// @param onBorder  if given, set when the closest feature is a vertex or edge of the
+    ///                  mesh's border (the side of x is then a guess: x lies beyond the border)
+    double signedDistance(const Vec3& x, std::int64_t startVertex, std::uint32_t& face,
+                          bool* onBorder = nullptr) const;
 
     /// As signedDistance(), then made exact whatever the shape (sharp edges and corners give
     /// the descent local minima): every triangle within the descent's distance is checked,
     /// through a uniform grid of triangles built on first use with the given cell size.
     double exactSignedDistance(const Vec3& x, std::int64_t startVertex, double cellSize) const;
+
+    /// Angle-weighted (pseudo-)normal of vertex @p v, unit length, pointing out of the solid.
+    const Vec3& vertexNormal(std::size_t v) const { return mVertexNormal[v]; }
 
 private:
     double faceDistance(const Vec3& x, std::uint32_t f, Vec3& closest, int& feature) const;
@@ -41,6 +47,7 @@ private:
     mutable std::vector<std::uint32_t> mCellTris;
     std::vector<Vec3> mFaceNormal, mVertexNormal;
     std::vector<std::uint32_t> mFirst, mFaces;  // vertex -> incident faces (CSR)
+    std::vector<std::uint8_t> mBorderVertex;    // 1 for vertices on a border edge
 };
 
 } // namespace msii::detail

@@ -12,8 +12,9 @@
 ///   it is defined; beyond the border the sign is unreliable, so results whose ball reaches
 ///   the border are masked (invariants/volume_sphere.h).
 /// Signs come from angle-weighted pseudo-normals of the closest triangle feature
-/// (Baerentzen & Aanaes), exact for consistently oriented meshes, and are propagated beyond
-/// the band by OpenVDB's signed flood fill.
+/// (Baerentzen & Aanaes), exact for consistently oriented meshes. Beyond the band they are
+/// spread from the band's faces, breadth first (not by OpenVDB's axis-scanning flood fill,
+/// which fails next to open, tilted sheets), within 24 voxels of the mesh's bounding box.
 
 #include <msii/core/progress.h>
 #include <msii/mesh/trimesh.h>
