@@ -19,34 +19,13 @@
 
 #include <unistd.h>
 
+#include "../support/temp_dir.h"
+
 namespace fs = std::filesystem;
 using namespace msii;
+using msii::test::TempDir;
 
 namespace {
-
-class TempDir {
-public:
-    TempDir()
-    {
-        std::string pattern = (fs::temp_directory_path() / "msii-test-write-XXXXXX").string();
-        if (!::mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
-        mPath = pattern;
-    }
-    ~TempDir() { fs::remove_all(mPath); }
-    std::string file(const std::string& name) const { return (mPath / name).string(); }
-    const fs::path& path() const { return mPath; }
-    /// Names of all entries, hidden ones included (temporary files start with a dot).
-    std::vector<std::string> entries() const
-    {
-        std::vector<std::string> names;
-        for (const auto& entry : fs::directory_iterator(mPath)) names.push_back(entry.path().filename().string());
-        std::sort(names.begin(), names.end());
-        return names;
-    }
-
-private:
-    fs::path mPath;
-};
 
 std::string readFile(const std::string& path)
 {

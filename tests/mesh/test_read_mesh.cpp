@@ -17,26 +17,13 @@
 #include <string>
 #include <vector>
 
+#include "../support/temp_dir.h"
+
 namespace fs = std::filesystem;
 using namespace msii;
+using msii::test::TempDir;
 
 namespace {
-
-/// A fresh folder under the system temp folder, removed with everything in it.
-class TempDir {
-public:
-    TempDir()
-    {
-        std::string pattern = (fs::temp_directory_path() / "msii-test-read-XXXXXX").string();
-        if (!::mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
-        mPath = pattern;
-    }
-    ~TempDir() { fs::remove_all(mPath); }
-    std::string file(const std::string& name) const { return (mPath / name).string(); }
-
-private:
-    fs::path mPath;
-};
 
 void writeFile(const std::string& path, const std::string& bytes)
 {

@@ -16,6 +16,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "../support/temp_dir.h"
+
 namespace fs = std::filesystem;
 using namespace msii;
 
@@ -26,14 +28,11 @@ struct RunResult {
     std::string err;
 };
 
-fs::path tempDir()
+/// One folder for the whole test program, removed at exit.
+const fs::path& tempDir()
 {
-    static const fs::path dir = [] {
-        fs::path d = fs::temp_directory_path() / ("msii_cli_" + std::to_string(getpid()));
-        fs::create_directories(d);
-        return d;
-    }();
-    return dir;
+    static const msii::test::TempDir dir;
+    return dir.path();
 }
 
 RunResult runMsii(const std::string& args)

@@ -7,8 +7,6 @@
 #include <msii/core/errors.h>
 
 #include <openvdb/tools/Dense.h>
-#include <openvdb/tools/Interpolation.h>
-#include <openvdb/tools/SignedFloodFill.h>
 #include <openvdb/tree/LeafManager.h>
 
 #include <tbb/blocked_range.h>
@@ -471,17 +469,19 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
                 const CoordBBox box(lo, lo.offsetBy(side - 1));
                 openvdb::tools::Dense<float, openvdb::tools::LayoutZYX> dense(box, sc.zyx.data());
                 openvdb::tools::copyToDense(occ, dense, /*serial=*/true);
-                // Occupancy = 1/2 − q, laid out with `axis` fastest.
+                // Occupancy = 1/2 − q, laid out with `axis` fastest (z: in place).
                 const std::size_t s2 = std::size_t(side) * side;
-                for (std::size_t x = 0; x < std::size_t(side); ++x)
-                    for (std::size_t y = 0; y < std::size_t(side); ++y)
-                        for (std::size_t z = 0; z < std::size_t(side); ++z) {
-                            const float o = 0.5f - sc.zyx[x * s2 + y * side + z];
-                            const std::size_t at = axis == 2 ? x * s2 + y * side + z
-                                                 : axis == 1 ? x * s2 + z * side + y
-                                                             : y * s2 + z * side + x;
-                            sc.buffer[at] = o;
-                        }
+                float* occupancyBlock = sc.zyx.data();
+                if (axis == 2) {
+                    for (float& v : sc.zyx) v = 0.5f - v;
+                } else {
+                    for (std::size_t x = 0; x < std::size_t(side); ++x)
+                        for (std::size_t y = 0; y < std::size_t(side); ++y)
+                            for (std::size_t z = 0; z < std::size_t(side); ++z)
+                                sc.buffer[axis == 1 ? x * s2 + z * side + y : y * s2 + z * side + x] =
+                                    0.5f - sc.zyx[x * s2 + y * side + z];
+                    occupancyBlock = sc.buffer.data();
+                }
 
                 const auto& offsets = stencil.offsets[axis];
                 for (int u = 0; u < 8; ++u)
@@ -491,7 +491,7 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
                         const std::size_t start =
                             (std::size_t(u + stencil.reach) * side + std::size_t(v + stencil.reach)) *
                                 side + std::size_t(stencil.reach);
-                        applyStencil(stencil, offsets, sc.buffer.data() + start, sc.groupSum.data(),
+                        applyStencil(stencil, offsets, occupancyBlock + start, sc.groupSum.data(),
                                      sc.sumV.data(), sc.sumS.data());
                         for (int t = 0; t < kRow; ++t) {
                             const Coord local = axis == 2 ? Coord(u, v, t)

@@ -140,11 +140,9 @@ LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options, Prog
     {
         // The flood fill's sides are right for leaves; tiles near the mesh get theirs from
         // the band (detail::fillTileSides), which also holds for open, tilted sheets.
-        openvdb::CoordBBox box;
-        for (const Vec3& p : mesh.points) {
-            const openvdb::Vec3d u = transform->worldToIndex(openvdb::Vec3d(p.x, p.y, p.z));
-            box.expand(openvdb::Coord::floor(u));
-        }
+        openvdb::CoordBBox box(
+            openvdb::Coord::floor(transform->worldToIndex(openvdb::Vec3d(lo.x, lo.y, lo.z))),
+            openvdb::Coord::ceil(transform->worldToIndex(openvdb::Vec3d(hi.x, hi.y, hi.z))));
         box.expand(kSidePadding);
         detail::fillTileSides(grid->tree(), box, grid->background(), -grid->background(),
                               guessed.get());
