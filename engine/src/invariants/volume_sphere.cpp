@@ -18,7 +18,6 @@
 #include <memory>
 #include <chrono>
 #include <cmath>
-#include <cstring>
 
 namespace msii {
 
@@ -184,16 +183,6 @@ void copyTileSides(FloatTree& coarse, const FloatTree& fine, int level,
 // eight nodes in a row are computed together as eight consecutive floats.
 
 constexpr int kRow = 8;  // nodes per row = the leaf node's edge
-using Row = float __attribute__((vector_size(kRow * sizeof(float))));
-
-/// Adds the kRow floats at @p p (unaligned) to @p sum. (Not a function returning a Row:
-/// that would change the calling convention with and without AVX.)
-inline void addRow(Row& sum, const float* p)
-{
-    Row r;
-    std::memcpy(&r, p, sizeof(Row));
-    sum += r;
-}
 
 struct Stencil {
     int reach = 0;      // voxels beyond the 8^3 block that the stencil reads
@@ -269,32 +258,43 @@ Stencil makeStencil(const std::vector<double>& rho)  // radii in voxels of the l
 }
 
 /// Stencil sums for the kRow nodes of a row that starts at @p row in the dense block whose
-/// fastest axis runs along the row: V and S per radius, each a Row (one value per node).
-inline void applyStencil(const Stencil& st, const std::vector<std::int32_t>& offsets,
-                         const float* row, Row* groupSum, Row* sumV, Row* sumS)
+/// fastest axis runs along the row: V and S per radius, kRow floats each (one per node).
+/// The inner loops over kRow consecutive floats become single vector instructions; an AVX2
+/// version is compiled beside the generic one and chosen at run time.
+__attribute__((target_clones("avx2", "default"))) void applyStencil(
+    const Stencil& st, const std::vector<std::int32_t>& offsets, const float* row,
+    float* groupSum, float* sumV, float* sumS)
 {
     const std::size_t ng = st.numGroups();
     const std::int32_t* off = offsets.data();
     for (std::size_t g = 0; g < ng; ++g) {
-        Row a0 = Row{}, a1 = Row{};
+        float a0[kRow] = {}, a1[kRow] = {};
         std::uint32_t e = st.groupFirst[g];
         const std::uint32_t end = st.groupFirst[g + 1];
         for (; e + 1 < end; e += 2) {
-            addRow(a0, row + off[e]);
-            addRow(a1, row + off[e + 1]);
+            const float* p0 = row + off[e];
+            const float* p1 = row + off[e + 1];
+            for (int t = 0; t < kRow; ++t) {
+                a0[t] += p0[t];
+                a1[t] += p1[t];
+            }
         }
-        if (e < end) addRow(a0, row + off[e]);
-        groupSum[g] = a0 + a1;
+        if (e < end)
+            for (int t = 0; t < kRow; ++t) a0[t] += row[off[e] + t];
+        for (int t = 0; t < kRow; ++t) groupSum[g * kRow + t] = a0[t] + a1[t];
     }
     const int nr = st.numRadii;
-    for (int j = 0; j < nr; ++j) sumV[j] = sumS[j] = Row{};
+    std::fill(sumV, sumV + nr * kRow, 0.0f);
+    std::fill(sumS, sumS + nr * kRow, 0.0f);
     for (std::size_t g = 0; g < ng; ++g) {
         const float* wv = st.wV.data() + g * nr;
         const float* ws = st.wS.data() + g * nr;
-        for (int j = 0; j < nr; ++j) {
-            sumV[j] += wv[j] * groupSum[g];
-            sumS[j] += ws[j] * groupSum[g];
-        }
+        const float* sum = groupSum + g * kRow;
+        for (int j = 0; j < nr; ++j)
+            for (int t = 0; t < kRow; ++t) {
+                sumV[j * kRow + t] += wv[j] * sum[t];
+                sumS[j * kRow + t] += ws[j] * sum[t];
+            }
     }
 }
 
@@ -440,12 +440,12 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
         const std::size_t denseSize = std::size_t(side) * side * side;
         struct Scratch {
             std::vector<float> zyx, buffer;
-            std::vector<Row> groupSum, sumV, sumS;
+            std::vector<float> groupSum, sumV, sumS;  // kRow floats per group / radius
         };
         tbb::enumerable_thread_specific<Scratch> scratch([&] {
             return Scratch{std::vector<float>(denseSize), std::vector<float>(denseSize),
-                           std::vector<Row>(stencil.numGroups()), std::vector<Row>(nr),
-                           std::vector<Row>(nr)};
+                           std::vector<float>(stencil.numGroups() * kRow),
+                           std::vector<float>(nr * kRow), std::vector<float>(nr * kRow)};
         });
         if (progress) progress->start("V and S, level " + std::to_string(level), blocks.size());
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 4), [&](const auto& r) {
@@ -501,8 +501,8 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
                             if (!leaf.isValueOn(ijk)) continue;
                             const std::size_t n = std::size_t(leaf.getValue(ijk));
                             for (int j = 0; j < nr; ++j) {
-                                nodeV[n * nr + j] = float(sc.sumV[j][t] / stencil.sumV[j]);
-                                nodeS[n * nr + j] = float(sc.sumS[j][t] / stencil.sumS[j]);
+                                nodeV[n * nr + j] = float(sc.sumV[j * kRow + t] / stencil.sumV[j]);
+                                nodeS[n * nr + j] = float(sc.sumS[j * kRow + t] / stencil.sumS[j]);
                             }
                             // Signed distance of the voxel centre, for the surface correction:
                             // on the fine level straight from the (exact) band, on coarser
