@@ -1,16 +1,12 @@
 #include "levelset_impl.h"
 #include "tile_sides.h"
+#include "band_raster.h"
 #include "mesh_distance.h"
 
 #include <msii/core/errors.h>
 
 #include <openvdb/tools/Interpolation.h>
-#include <openvdb/tools/MeshToVolume.h>
 #include <openvdb/tools/SignedFloodFill.h>
-#include <openvdb/tree/LeafManager.h>
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include <cmath>
 #include <mutex>
@@ -82,59 +78,19 @@ LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options, Prog
     const auto snap = [&](double c) { return 512.0 * h * (std::round(c / (512.0 * h)) - 4.0); };
     const openvdb::Vec3d shift(snap(centre.x), snap(centre.y), snap(centre.z));
     transform->postTranslate(shift);
-    std::vector<openvdb::Vec3s> indexPoints(mesh.numVertices());
-    std::vector<openvdb::Vec3I> triangles(mesh.numTriangles());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.numVertices()), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            const Vec3& p = mesh.points[i];
-            indexPoints[i] = openvdb::Vec3s(transform->worldToIndex(openvdb::Vec3d(p.x, p.y, p.z)));
-        }
-    });
-    for (std::size_t f = 0; f < mesh.numTriangles(); ++f) {
-        const auto& t = mesh.triangles[f];
-        triangles[f] = openvdb::Vec3I(t[0], t[1], t[2]);
-    }
-
-    // Unsigned distances with the closest triangle of every band voxel; signs follow below.
-    openvdb::tools::QuadAndTriangleDataAdapter<openvdb::Vec3s, openvdb::Vec3I> adapter(
-        indexPoints, triangles);
-    openvdb::Int32Grid closest;
-    const float band = float(options.halfWidth);
-    openvdb::FloatGrid::Ptr grid = openvdb::tools::meshToVolume<openvdb::FloatGrid>(
-        adapter, *transform, band, band, openvdb::tools::UNSIGNED_DISTANCE_FIELD, &closest);
-    indexPoints.clear();
-    indexPoints.shrink_to_fit();
-    triangles.clear();
-    triangles.shrink_to_fit();
+    auto distance = std::make_shared<detail::MeshDistance>(mesh);
     if (progress) progress->advance();
 
-    // OpenVDB's distances beyond the first voxel come from a neighbour's triangle and can be
-    // off by a good part of a voxel: make every band voxel exact, and signed by the
-    // pseudo-normal of its closest feature.
-    auto distance = std::make_shared<detail::MeshDistance>(mesh);
-    auto guessed = std::make_shared<openvdb::MaskTree>();
-    std::mutex guessMutex;
-    openvdb::tree::ValueAccessor<openvdb::MaskTree, false> guessAcc(*guessed);
-    openvdb::tree::LeafManager<openvdb::FloatTree> leaves(grid->tree());
-    leaves.foreach([&](openvdb::FloatTree::LeafNodeType& leaf, std::size_t) {
-        auto indexAcc = closest.getConstAccessor();
-        for (auto it = leaf.beginValueOn(); it; ++it) {
-            const openvdb::Coord ijk = it.getCoord();
-            const std::int32_t f = indexAcc.getValue(ijk);
-            if (f < 0 || std::size_t(f) >= mesh.numTriangles()) continue;
-            const openvdb::Vec3d w = transform->indexToWorld(ijk);
-            std::uint32_t face = std::uint32_t(f);
-            bool beyondBorder = false;
-            it.setValue(float(
-                distance->signedDistance(Vec3(w.x(), w.y(), w.z()), -1, face, &beyondBorder)));
-            // Beyond an open border the side is a guess: such voxels are remembered, so that
-            // fillTileSides() does not spread their side (results there are masked anyway).
-            if (beyondBorder) {
-                std::lock_guard<std::mutex> lock(guessMutex);
-                guessAcc.setValueOn(ijk);
-            }
-        }
-    });
+    // Exact signed distances in the band; the sides of the space off it follow below.
+    detail::BandOptions bandOptions;
+    bandOptions.voxelSize = h;
+    bandOptions.origin = Vec3(shift.x(), shift.y(), shift.z());
+    bandOptions.halfWidth = options.halfWidth;
+    detail::Band band = detail::rasterizeBand(mesh, *distance, bandOptions);
+    openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(band.distance);
+    grid->setTransform(transform);
+    grid->setGridClass(openvdb::GRID_LEVEL_SET);
+    const std::shared_ptr<const openvdb::MaskTree> guessed = band.guessedSide;
     if (progress) progress->advance();
     openvdb::tools::signedFloodFill(grid->tree());
     {

@@ -176,15 +176,28 @@ double MeshDistance::signedDistance(const Vec3& x, std::int64_t startVertex,
         if (!improved) break;
     }
     face = bestFace;
-    const double d = std::sqrt(best);
-    const Vec3 n = pseudoNormal(bestFace, bestFeature);
-    const double along = dot(x - bestPoint, n);
+    return signedFromClosest(x, Closest{best, bestPoint, bestFace, bestFeature}, onBorder);
+}
+
+MeshDistance::Closest MeshDistance::closestOnFace(const Vec3& x, std::uint32_t f) const
+{
+    Closest c;
+    c.face = f;
+    c.squaredDistance = faceDistance(x, f, c.point, c.feature);
+    return c;
+}
+
+double MeshDistance::signedFromClosest(const Vec3& x, const Closest& c, bool* onBorder) const
+{
+    const double d = std::sqrt(c.squaredDistance);
+    const Vec3 n = pseudoNormal(c.face, c.feature);
+    const double along = dot(x - c.point, n);
     if (onBorder) {
         // Beyond the border: the closest feature is on it and x lies off to the side rather
         // than in front of or behind it (the side is then a guess).
-        const auto& t = mMesh.triangles[bestFace];
+        const auto& t = mMesh.triangles[c.face];
         bool border = false;
-        switch (bestFeature) {
+        switch (c.feature) {
         case kVertexA: border = mBorderVertex[t[0]]; break;
         case kVertexB: border = mBorderVertex[t[1]]; break;
         case kVertexC: border = mBorderVertex[t[2]]; break;

@@ -29,6 +29,24 @@ public:
     /// through a uniform grid of triangles built on first use with the given cell size.
     double exactSignedDistance(const Vec3& x, std::int64_t startVertex, double cellSize) const;
 
+    /// The closest point of one triangle to a point, and the feature (face, edge or vertex)
+    /// it lies on.
+    struct Closest {
+        double squaredDistance = 0;
+        Vec3 point;
+        std::uint32_t face = 0;
+        int feature = 0;
+    };
+    Closest closestOnFace(const Vec3& x, std::uint32_t f) const;
+
+    /// Signed distance from @p x given its closest point on the whole mesh @p c: the sign
+    /// is that of the pseudo-normal of c's feature (Baerentzen & Aanaes), exact for a
+    /// consistently oriented mesh. @p onBorder as in signedDistance().
+    double signedFromClosest(const Vec3& x, const Closest& c, bool* onBorder = nullptr) const;
+
+    /// Unit normal of triangle @p f, pointing out of the solid.
+    const Vec3& faceNormal(std::size_t f) const { return mFaceNormal[f]; }
+
     /// Angle-weighted (pseudo-)normal of vertex @p v, unit length, pointing out of the solid.
     const Vec3& vertexNormal(std::size_t v) const { return mVertexNormal[v]; }
 

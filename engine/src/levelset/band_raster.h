@@ -1,0 +1,34 @@
+#pragma once
+// Private to the engine: the narrow band of exact signed distances, rasterised from the mesh.
+#include "mesh_distance.h"
+
+#include <openvdb/openvdb.h>
+
+namespace msii::detail {
+
+struct BandOptions {
+    double voxelSize = 0;  ///< h, in mesh units
+    Vec3 origin;           ///< world position of voxel (0, 0, 0)'s centre
+    double halfWidth = 2;  ///< voxels closer to the mesh than halfWidth·h form the band
+};
+
+struct Band {
+    /// Band voxels: active, exact signed distance (world units, negative inside). Other
+    /// voxels of the leaves are inactive at +halfWidth·h (no side yet; see levelset.cpp).
+    openvdb::FloatTree::Ptr distance;
+    /// Band voxels beyond an open border (closest feature on the border, to the side of it):
+    /// their sign is a guess.
+    openvdb::MaskTree::Ptr guessedSide;
+};
+
+/// Every voxel centre closer than halfWidth·h to the mesh gets its exact distance and the
+/// sign of its closest feature's pseudo-normal.
+///
+/// Triangles are binned to the 8³ blocks their band reaches; each block then takes, voxel by
+/// voxel, the closest of its triangles (ties keep the lowest face index), after two cheap
+/// rejections (the triangle's plane and its bounding sphere). So every voxel is exact
+/// whatever the shape, the cost is proportional to the band's size, and the result does not
+/// depend on the number of threads.
+Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const BandOptions& options);
+
+} // namespace msii::detail
