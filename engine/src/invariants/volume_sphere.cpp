@@ -513,7 +513,7 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
                                 const openvdb::Vec3d w =
                                     sdf.transform().indexToWorld(fineIndexOf(ijk, level));
                                 nodePhi[n] = float(levelSet.impl().distance->exactSignedDistance(
-                                    Vec3(w.x(), w.y(), w.z()), seedVertex[n], 2.0 * h0));
+                                    Vec3(w.x(), w.y(), w.z()), seedVertex[n], 4.0 * h0));
                             }
                         }
                     }

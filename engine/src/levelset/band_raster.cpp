@@ -123,7 +123,7 @@ Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const Band
                 const Vec3& a = mesh.points[mesh.triangles[f][0]];
                 const Vec3& n = distance.faceNormal(f);
                 const Vec3& centre = spheres[f].first;
-                const double sphereReach2 = (spheres[f].second + reach) * (spheres[f].second + reach);
+                const double radius = spheres[f].second, radius2 = radius * radius;
                 std::array<int, 3> lo, hi;
                 for (int k = 0; k < 3; ++k) {
                     lo[k] = std::max(v.lo[k], origin[k]) - origin[k];
@@ -136,9 +136,16 @@ Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const Band
                                          o.z + h * (origin.z() + z));
                             const int offset = (x << 2 * kLog2) | (y << kLog2) | z;
                             MeshDistance::Closest& current = best[std::size_t(offset)];
+                            // Lower bound of the squared distance: the distance to the
+                            // plane, and in the plane, the gap to the bounding circle.
                             const double plane = dot(p - a, n);
-                            if (plane * plane >= current.squaredDistance) continue;
-                            if (squaredNorm(p - centre) >= sphereReach2) continue;
+                            const double plane2 = plane * plane;
+                            if (plane2 >= current.squaredDistance) continue;
+                            const double lateral2 = squaredNorm(p - centre) - plane2;
+                            if (lateral2 > radius2) {
+                                const double gap = std::sqrt(lateral2) - radius;
+                                if (plane2 + gap * gap >= current.squaredDistance) continue;
+                            }
                             const MeshDistance::Closest c = distance.closestOnFace(p, f);
                             if (c.squaredDistance < current.squaredDistance) current = c;
                         }

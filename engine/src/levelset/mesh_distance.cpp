@@ -4,7 +4,6 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 
@@ -211,40 +210,61 @@ double MeshDistance::signedFromClosest(const Vec3& x, const Closest& c, bool* on
     return along < 0 ? -d : d;
 }
 
-std::uint64_t MeshDistance::cellKey(std::int64_t x, std::int64_t y, std::int64_t z) const
-{
-    const std::uint64_t m = (1u << 21) - 1;
-    return (std::uint64_t(x) & m) << 42 | (std::uint64_t(y) & m) << 21 | (std::uint64_t(z) & m);
-}
-
 void MeshDistance::buildGrid(double cellSize) const
 {
-    mCell = cellSize;
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> entries;
-    const auto cellOf = [&](double v) { return std::int64_t(std::floor(v / mCell)); };
-    for (std::size_t f = 0; f < mMesh.numTriangles(); ++f) {
-        const auto& t = mMesh.triangles[f];
-        Vec3 lo = mMesh.points[t[0]], hi = lo;
-        for (int k = 1; k < 3; ++k)
-            for (int a = 0; a < 3; ++a) {
-                lo[a] = std::min(lo[a], mMesh.points[t[k]][a]);
-                hi[a] = std::max(hi[a], mMesh.points[t[k]][a]);
-            }
-        for (auto x = cellOf(lo.x); x <= cellOf(hi.x); ++x)
-            for (auto y = cellOf(lo.y); y <= cellOf(hi.y); ++y)
-                for (auto z = cellOf(lo.z); z <= cellOf(hi.z); ++z)
-                    entries.emplace_back(cellKey(x, y, z), std::uint32_t(f));
-    }
-    tbb::parallel_sort(entries.begin(), entries.end());
-    mCellTris.resize(entries.size());
-    for (std::size_t i = 0; i < entries.size(); ++i) {
-        if (i == 0 || entries[i].first != entries[i - 1].first) {
-            mCellKeys.push_back(entries[i].first);
-            mCellFirst.push_back(std::uint32_t(i));
+    const std::size_t nf = mMesh.numTriangles();
+    Vec3 lo = mMesh.points.front(), hi = lo;
+    for (const auto& p : mMesh.points)
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], p[a]);
+            hi[a] = std::max(hi[a], p[a]);
         }
-        mCellTris[i] = entries[i].second;
-    }
-    mCellFirst.push_back(std::uint32_t(entries.size()));
+    mCell = cellSize;
+    const auto dims = [&] {
+        std::array<std::int64_t, 3> d;
+        for (int a = 0; a < 3; ++a) d[a] = std::int64_t(std::floor((hi[a] - lo[a]) / mCell)) + 1;
+        return d;
+    };
+    while (double(dims()[0]) * double(dims()[1]) * double(dims()[2]) > double(1 << 25)) mCell *= 1.25;
+    mGridDims = dims();
+    mGridOrigin = lo;
+
+    mBoundingSphere.resize(nf);
+    std::vector<std::array<std::int64_t, 6>> range(nf);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf), [&](const auto& r) {
+        for (std::size_t f = r.begin(); f < r.end(); ++f) {
+            const auto& t = mMesh.triangles[f];
+            const Vec3 c = (mMesh.points[t[0]] + mMesh.points[t[1]] + mMesh.points[t[2]]) / 3.0;
+            double r2 = 0;
+            for (auto v : t) r2 = std::max(r2, squaredNorm(mMesh.points[v] - c));
+            mBoundingSphere[f] = {c.x, c.y, c.z, std::sqrt(r2) * (1 + 1e-9)};
+            for (int a = 0; a < 3; ++a) {
+                double tlo = mMesh.points[t[0]][a], thi = tlo;
+                for (int k = 1; k < 3; ++k) {
+                    tlo = std::min(tlo, mMesh.points[t[k]][a]);
+                    thi = std::max(thi, mMesh.points[t[k]][a]);
+                }
+                range[f][a] = std::clamp<std::int64_t>(std::int64_t(std::floor((tlo - lo[a]) / mCell)), 0, mGridDims[a] - 1);
+                range[f][a + 3] = std::clamp<std::int64_t>(std::int64_t(std::floor((thi - lo[a]) / mCell)), 0, mGridDims[a] - 1);
+            }
+        }
+    });
+    const auto cellIndex = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
+        return std::size_t((x * mGridDims[1] + y) * mGridDims[2] + z);
+    };
+    mCellFirst.assign(std::size_t(mGridDims[0] * mGridDims[1] * mGridDims[2]) + 1, 0);
+    for (std::size_t f = 0; f < nf; ++f)
+        for (auto x = range[f][0]; x <= range[f][3]; ++x)
+            for (auto y = range[f][1]; y <= range[f][4]; ++y)
+                for (auto z = range[f][2]; z <= range[f][5]; ++z) ++mCellFirst[cellIndex(x, y, z) + 1];
+    for (std::size_t c = 1; c < mCellFirst.size(); ++c) mCellFirst[c] += mCellFirst[c - 1];
+    mCellTris.resize(mCellFirst.back());
+    std::vector<std::uint32_t> fill(mCellFirst.begin(), mCellFirst.end() - 1);
+    for (std::size_t f = 0; f < nf; ++f)  // ascending face index within every cell
+        for (auto x = range[f][0]; x <= range[f][3]; ++x)
+            for (auto y = range[f][1]; y <= range[f][4]; ++y)
+                for (auto z = range[f][2]; z <= range[f][5]; ++z)
+                    mCellTris[fill[cellIndex(x, y, z)]++] = std::uint32_t(f);
 }
 
 double MeshDistance::exactSignedDistance(const Vec3& x, std::int64_t startVertex,
@@ -252,34 +272,44 @@ double MeshDistance::exactSignedDistance(const Vec3& x, std::int64_t startVertex
 {
     std::call_once(mGridOnce, [&] { buildGrid(cellSize); });
     std::uint32_t face = 0;
-    const double bound = std::abs(signedDistance(x, startVertex, face));
-    double best = std::numeric_limits<double>::infinity();
-    Vec3 closest, bestPoint;
-    int feature = kFace, bestFeature = kFace;
-    std::uint32_t bestFace = face;
-    const auto cellOf = [&](double v) { return std::int64_t(std::floor(v / mCell)); };
-    const double reach = bound * (1 + 1e-9) + 1e-12;
-    for (auto cx = cellOf(x.x - reach); cx <= cellOf(x.x + reach); ++cx)
-        for (auto cy = cellOf(x.y - reach); cy <= cellOf(x.y + reach); ++cy)
-            for (auto cz = cellOf(x.z - reach); cz <= cellOf(x.z + reach); ++cz) {
-                const auto it = std::lower_bound(mCellKeys.begin(), mCellKeys.end(), cellKey(cx, cy, cz));
-                if (it == mCellKeys.end() || *it != cellKey(cx, cy, cz)) continue;
-                const std::size_t c = std::size_t(it - mCellKeys.begin());
+    signedDistance(x, startVertex, face);
+    Closest best = closestOnFace(x, face);  // the descent's answer: an upper bound
+    double bestDistance = std::sqrt(best.squaredDistance);
+    std::array<std::int64_t, 6> cells;
+    for (int a = 0; a < 3; ++a) {
+        const double reach = bestDistance * (1 + 1e-9) + 1e-12;
+        cells[a] = std::max<std::int64_t>(0, std::int64_t(std::floor((x[a] - reach - mGridOrigin[a]) / mCell)));
+        cells[a + 3] = std::min<std::int64_t>(mGridDims[a] - 1, std::int64_t(std::floor((x[a] + reach - mGridOrigin[a]) / mCell)));
+    }
+    for (auto cx = cells[0]; cx <= cells[3]; ++cx)
+        for (auto cy = cells[1]; cy <= cells[4]; ++cy)
+            for (auto cz = cells[2]; cz <= cells[5]; ++cz) {
+                const std::size_t c = std::size_t((cx * mGridDims[1] + cy) * mGridDims[2] + cz);
                 for (auto i = mCellFirst[c]; i < mCellFirst[c + 1]; ++i) {
-                    const double d = faceDistance(x, mCellTris[i], closest, feature);
+                    const std::uint32_t f = mCellTris[i];
+                    const auto& s = mBoundingSphere[f];
+                    const double dx = x.x - s[0], dy = x.y - s[1], dz = x.z - s[2];
+                    const double limit = bestDistance + s[3];
+                    const double centre2 = dx * dx + dy * dy + dz * dz;
+                    if (centre2 > limit * limit) continue;
+                    // Tighter: the distance to the triangle's plane and, within the plane,
+                    // the gap to its bounding circle.
+                    const Vec3& n = mFaceNormal[f];
+                    const double plane = dx * n.x + dy * n.y + dz * n.z;
+                    const double plane2 = plane * plane, lateral2 = centre2 - plane2;
+                    const double gap = lateral2 > s[3] * s[3] ? std::sqrt(lateral2) - s[3] : 0.0;
+                    if (plane2 + gap * gap > best.squaredDistance) continue;
+                    const Closest c2 = closestOnFace(x, f);
                     // Ties (the same point reached through several faces) keep the lowest
                     // face index, so the sign does not depend on the visiting order.
-                    if (d < best || (d == best && mCellTris[i] < bestFace)) {
-                        best = d;
-                        bestFace = mCellTris[i];
-                        bestPoint = closest;
-                        bestFeature = feature;
+                    if (c2.squaredDistance < best.squaredDistance ||
+                        (c2.squaredDistance == best.squaredDistance && f < best.face)) {
+                        best = c2;
+                        bestDistance = std::sqrt(best.squaredDistance);
                     }
                 }
             }
-    if (!std::isfinite(best)) return signedDistance(x, startVertex, face);
-    const double d = std::sqrt(best);
-    return dot(x - bestPoint, pseudoNormal(bestFace, bestFeature)) < 0 ? -d : d;
+    return signedFromClosest(x, best);
 }
 
 } // namespace msii::detail

@@ -3,6 +3,7 @@
 // triangle mesh, found by descending over the mesh from a nearby start triangle.
 #include <msii/mesh/trimesh.h>
 
+#include <array>
 #include <cstdint>
 #include <mutex>
 #include <vector>
@@ -26,7 +27,8 @@ public:
 
     /// As signedDistance(), then made exact whatever the shape (sharp edges and corners give
     /// the descent local minima): every triangle within the descent's distance is checked,
-    /// through a uniform grid of triangles built on first use with the given cell size.
+    /// through a uniform grid of triangles built on first use with the given cell size
+    /// (enlarged if the grid would have more than 2^25 cells).
     double exactSignedDistance(const Vec3& x, std::int64_t startVertex, double cellSize) const;
 
     /// The closest point of one triangle to a point, and the feature (face, edge or vertex)
@@ -55,14 +57,17 @@ private:
     Vec3 pseudoNormal(std::uint32_t f, int feature) const;
 
     void buildGrid(double cellSize) const;
-    std::uint64_t cellKey(std::int64_t x, std::int64_t y, std::int64_t z) const;
 
     const TriMesh& mMesh;
+    // Uniform grid of triangles over the mesh's bounding box, built on first use: cell c
+    // holds mCellTris[mCellFirst[c] .. mCellFirst[c + 1]), and every triangle has a bounding
+    // sphere (centroid, radius) for a quick rejection.
     mutable std::once_flag mGridOnce;
     mutable double mCell = 0;
-    mutable std::vector<std::uint64_t> mCellKeys;     // sorted unique cells
-    mutable std::vector<std::uint32_t> mCellFirst;    // CSR into mCellTris
-    mutable std::vector<std::uint32_t> mCellTris;
+    mutable Vec3 mGridOrigin;
+    mutable std::array<std::int64_t, 3> mGridDims{};
+    mutable std::vector<std::uint32_t> mCellFirst, mCellTris;
+    mutable std::vector<std::array<double, 4>> mBoundingSphere;
     std::vector<Vec3> mFaceNormal, mVertexNormal;
     std::vector<std::uint32_t> mFirst, mFaces;  // vertex -> incident faces (CSR)
     std::vector<std::uint8_t> mBorderVertex;    // 1 for vertices on a border edge
