@@ -6,6 +6,7 @@
 #include <msii/core/version.h>
 #include <msii/invariants/compute.h>
 #include <msii/io/atomic_file.h>
+#include <msii/io/feature_properties.h>
 #include <msii/io/write_ply.h>
 #include <msii/mesh/mesh_stats.h>
 #include <msii/mesh/read_mesh.h>
@@ -17,7 +18,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <iomanip>
 #include <memory>
 #include <sstream>
 
@@ -37,13 +37,6 @@ struct ComputeArgs {
     int threads = 0;
     bool quiet = false, overwrite = false, repair = false, noSphere = false;
 };
-
-std::string twoDigits(std::size_t j)
-{
-    std::ostringstream s;
-    s << std::setw(2) << std::setfill('0') << j;
-    return s.str();
-}
 
 /// Where the result of @p input goes: --output for a single input, else
 /// <output-dir or input's folder>/<stem>.msii.ply
@@ -112,14 +105,9 @@ void computeOne(const ComputeArgs& args, const std::string& input, const std::st
         for (const auto& w : result.warnings)
             std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), w.c_str());
 
-    // Per-vertex properties: V_01..V_NN, S_01..S_NN (radius ascending), quality = V_NN.
+    const std::vector<VertexProperty> props = featureProperties(result.invariants);
     const auto& inv = result.invariants;
     const std::size_t n = inv.radii.size();
-    std::vector<VertexProperty> props;
-    for (std::size_t j = 0; j < n; ++j) props.push_back({"V_" + twoDigits(j + 1), inv.volume[j]});
-    if (options.computeSphere)
-        for (std::size_t j = 0; j < n; ++j) props.push_back({"S_" + twoDigits(j + 1), inv.sphere[j]});
-    props.push_back({"quality", inv.volume.back()});
 
     const auto tWrite = Clock::now();
     WritePlyOptions plyOptions;
