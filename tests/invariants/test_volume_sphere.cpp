@@ -8,6 +8,7 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
+#include <tuple>
 #include <cstdio>
 #include <functional>
 
@@ -208,35 +209,43 @@ TEST(VolumeSphere, RigidMotionInvariance)
         const Vec3 rotated = p * c + cross(axis, p) * s + axis * (dot(axis, p) * (1 - c));
         p = rotated + Vec3(12.34, -5.6, 7.89);
     }
-    ComputeOptions o;
-    o.radius = 1.5;
-    const ComputeResult r1 = computeInvariants(mesh, o);
-    o.voxelSize = r1.voxelSize;
-    const ComputeResult r2 = computeInvariants(moved, o);
-    double maxV = 0, maxS = 0, sumV = 0, sumS = 0;
-    std::size_t compared = 0;
-    for (std::size_t j = 0; j < r1.invariants.radii.size(); ++j) {
-        if (r1.invariants.radii[j] < 3 * r1.stats.medianEdge) continue;
-        for (std::size_t i = 0; i < mesh.numVertices(); ++i) {
-            const float v1 = r1.invariants.volume[j][i], v2 = r2.invariants.volume[j][i];
-            ASSERT_EQ(std::isnan(v1), std::isnan(v2)) << "vertex " << i << " radius " << j;
-            if (std::isnan(v1)) continue;
-            const double dv = std::abs(v1 - v2);
-            const double ds = std::abs(r1.invariants.sphere[j][i] - r2.invariants.sphere[j][i]);
-            maxV = std::max(maxV, dv);
-            maxS = std::max(maxS, ds);
-            sumV += dv;
-            sumS += ds;
-            ++compared;
+    // The issue asks for 1e-3. At the default precision (6 voxels per radius) V misses it by
+    // a few percent at the first radius of the coarsest level (measured 1.04e-3; the error
+    // falls like (h/r)^2); at precision 7 both V and S are within it.
+    for (const auto& [precision, tolV, tolS] :
+         {std::tuple{6.0, 1.1e-3, 1e-3}, std::tuple{7.0, 1e-3, 1e-3}}) {
+        ComputeOptions o;
+        o.radius = 1.5;
+        o.minVoxelsPerRadius = precision;
+        const ComputeResult r1 = computeInvariants(mesh, o);
+        o.voxelSize = r1.voxelSize;
+        const ComputeResult r2 = computeInvariants(moved, o);
+        double maxV = 0, maxS = 0, sumV = 0, sumS = 0;
+        std::size_t compared = 0;
+        for (std::size_t j = 0; j < r1.invariants.radii.size(); ++j) {
+            if (r1.invariants.radii[j] < 3 * r1.stats.medianEdge) continue;
+            for (std::size_t i = 0; i < mesh.numVertices(); ++i) {
+                const float v1 = r1.invariants.volume[j][i], v2 = r2.invariants.volume[j][i];
+                ASSERT_EQ(std::isnan(v1), std::isnan(v2)) << "vertex " << i << " radius " << j;
+                if (std::isnan(v1)) continue;
+                const double dv = std::abs(v1 - v2);
+                const double ds = std::abs(r1.invariants.sphere[j][i] - r2.invariants.sphere[j][i]);
+                maxV = std::max(maxV, dv);
+                maxS = std::max(maxS, ds);
+                sumV += dv;
+                sumS += ds;
+                ++compared;
+            }
         }
+        ASSERT_GT(compared, mesh.numVertices());
+        std::printf("rigid motion, precision %g: %zu values, max |dV| %.2e, max |dS| %.2e, "
+                    "mean %.2e %.2e\n",
+                    precision, compared, maxV, maxS, sumV / compared, sumS / compared);
+        EXPECT_LE(maxV, tolV);
+        EXPECT_LE(maxS, tolS);
+        EXPECT_LE(sumV / compared, 2e-4);
+        EXPECT_LE(sumS / compared, 2e-4);
     }
-    ASSERT_GT(compared, mesh.numVertices());
-    std::printf("rigid motion: %zu values, max |dV| %.2e, max |dS| %.2e, mean %.2e %.2e\n",
-                compared, maxV, maxS, sumV / compared, sumS / compared);
-    EXPECT_LE(maxV, 1.5e-3);
-    EXPECT_LE(maxS, 2e-3);
-    EXPECT_LE(sumV / compared, 2e-4);
-    EXPECT_LE(sumS / compared, 2e-4);
 }
 
 TEST(VolumeSphere, OpenPatchAgreesWithClosedSlab)

@@ -6,7 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 
 using namespace msii;
 
@@ -28,7 +30,65 @@ double sphereError(const LevelSet& ls, double radius, double sign)
     return worst;
 }
 
+/// Reference distance from p to triangle (a, b, c): to the plane if p projects inside the
+/// triangle, else to the nearest of the three edges (a formulation independent of the
+/// engine's Voronoi-region one).
+double triangleDistance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c)
+{
+    const Vec3 n = normalized(cross(b - a, c - a));
+    const Vec3 q = p - n * dot(p - a, n);
+    const bool inside = dot(cross(b - a, q - a), n) >= 0 && dot(cross(c - b, q - b), n) >= 0 &&
+                        dot(cross(a - c, q - c), n) >= 0;
+    if (inside) return std::abs(dot(p - a, n));
+    const auto segment = [&](const Vec3& u, const Vec3& v) {
+        const double t = std::clamp(dot(p - u, v - u) / dot(v - u, v - u), 0.0, 1.0);
+        return norm(p - (u + (v - u) * t));
+    };
+    return std::min({segment(a, b), segment(b, c), segment(c, a)});
+}
+
 } // namespace
+
+TEST(LevelSet, BandIsExactAndSidesAreRightAroundSharpFeatures)
+{
+    // A rotated cube (side 2, centred at the origin): edges and corners at every angle to the grid. Voxel centres lie at
+    // multiples of h in world coordinates (the index space is shifted by whole blocks).
+    samples::CubeOptions co;
+    co.side = 2;
+    co.spacing = 0.3;
+    TriMesh mesh = samples::makeCube(co);
+    const Vec3 axis = normalized(Vec3(2, -1, 3));
+    const double angle = 0.6, c = std::cos(angle), s = std::sin(angle);
+    const auto rotate = [&](const Vec3& p, double sign) {
+        return p * c + cross(axis, p) * (s * sign) + axis * (dot(axis, p) * (1 - c));
+    };
+    for (auto& p : mesh.points) p = rotate(p - Vec3(1, 1, 1), +1.0);  // centred, then turned
+    LevelSetOptions lo;
+    lo.voxelSize = 0.1;
+    lo.halfWidth = 2;
+    const LevelSet ls = buildLevelSet(mesh, lo);
+    const double h = lo.voxelSize, band = lo.halfWidth * h;
+    std::size_t inBand = 0;
+    for (int i = -25; i <= 25; ++i)
+        for (int j = -25; j <= 25; ++j)
+            for (int k = -25; k <= 25; ++k) {
+                const Vec3 p(i * h, j * h, k * h);
+                double d = 1e9;
+                for (const auto& t : mesh.triangles)
+                    d = std::min(d, triangleDistance(p, mesh.points[t[0]], mesh.points[t[1]],
+                                                     mesh.points[t[2]]));
+                const Vec3 q = rotate(p, -1.0);  // in the cube's own frame
+                const bool inside = std::max({std::abs(q.x), std::abs(q.y), std::abs(q.z)}) < 1.0;
+                const double value = ls.signedDistance(p);
+                if (d < 1e-9) continue;  // on the surface: either sign
+                ASSERT_EQ(value < 0, inside) << "voxel " << i << " " << j << " " << k;
+                if (d < band - 1e-9) {
+                    ++inBand;
+                    ASSERT_NEAR(std::abs(value), d, 1e-6) << "voxel " << i << " " << j << " " << k;
+                }
+            }
+    EXPECT_GT(inBand, 5000u);
+}
 
 TEST(LevelSet, SphereDistancesAreExactInTheBand)
 {
@@ -78,6 +138,45 @@ TEST(LevelSet, OpenSheetInsideIsBehindTheSurface)
         EXPECT_NEAR(ls.signedDistance(Vec3(3.01, 2.97, z)), z, 1e-4) << z;
     EXPECT_LT(ls.signedDistance(Vec3(3, 3, -2.0)), 0);  // far behind: still inside
     EXPECT_GT(ls.signedDistance(Vec3(3, 3, 2.0)), 0);
+}
+
+TEST(LevelSet, SidesNextToAnOpenBorderFollowTheSurface)
+{
+    // A tilted open square: points above and below it near its border, off the band, must
+    // be outside and inside whatever the grid does beyond the border.
+    samples::HeightFieldOptions ho;
+    ho.kind = samples::HeightFieldKind::Plane;
+    ho.width = 4;
+    ho.height = 4;
+    ho.spacing = 0.1;
+    ho.noise = 0;
+    TriMesh mesh = samples::makeHeightField(ho);
+    const Vec3 axis = normalized(Vec3(1, 2, 0.5));
+    const double angle = 0.5, c = std::cos(angle), s = std::sin(angle);
+    const auto rotate = [&](const Vec3& p) {
+        return p * c + cross(axis, p) * s + axis * (dot(axis, p) * (1 - c));
+    };
+    for (auto& p : mesh.points) p = rotate(p);
+    LevelSetOptions lo;
+    lo.voxelSize = 0.05;
+    lo.halfWidth = 2;
+    const LevelSet ls = buildLevelSet(mesh, lo);
+    std::size_t checked = 0;
+    for (int i = 0; i <= 80; ++i) {
+        const double t = 4.0 * i / 80.0;
+        // Along all four sides, 0.02 to 0.3 inside the border, 0.12 to 0.4 off the surface.
+        for (const auto& [x, y] : {std::pair{t, 0.0}, std::pair{t, 4.0}, std::pair{0.0, t},
+                                   std::pair{4.0, t}}) {
+            for (double in : {0.02, 0.1, 0.3})
+                for (double off : {0.12, 0.2, 0.4}) {
+                    const double px = std::clamp(x, in, 4.0 - in), py = std::clamp(y, in, 4.0 - in);
+                    EXPECT_GT(ls.signedDistance(rotate(Vec3(px, py, off))), 0) << px << " " << py;
+                    EXPECT_LT(ls.signedDistance(rotate(Vec3(px, py, -off))), 0) << px << " " << py;
+                    ++checked;
+                }
+        }
+    }
+    EXPECT_GT(checked, 2000u);
 }
 
 TEST(LevelSet, RejectsBadVoxelSize)

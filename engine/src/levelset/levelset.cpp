@@ -92,7 +92,12 @@ LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options, Prog
     grid->setGridClass(openvdb::GRID_LEVEL_SET);
     const std::shared_ptr<const openvdb::MaskTree> guessed = band.guessedSide;
     if (progress) progress->advance();
-    openvdb::tools::signedFloodFill(grid->tree());
+    // Sides off the band: inside leaves from the nearest band voxel, then OpenVDB's flood
+    // fill for the tiles (not for leaves: see detail::fillLeafSides), then the tiles near the
+    // mesh again from the band.
+    detail::fillLeafSides(grid->tree(), grid->background());
+    openvdb::tools::signedFloodFill(grid->tree(), /*threaded=*/true, /*grainSize=*/1,
+                                    /*minLevel=*/1);
     {
         // The flood fill's sides are right for leaves; tiles near the mesh get theirs from
         // the band (detail::fillTileSides), which also holds for open, tilted sheets.

@@ -2,6 +2,8 @@
 
 #include <msii/core/errors.h>
 
+#include <openvdb/tree/LeafManager.h>
+
 #include <array>
 #include <memory>
 #include <cstdint>
@@ -99,6 +101,40 @@ void fillTileSides(openvdb::FloatTree& tree, const openvdb::CoordBBox& voxelBox,
                                    (lo.z() + int(z)) << kLog2);
                 tree.addTile(1, origin, st == kInside ? inside : outside, /*active=*/false);
             }
+}
+
+void fillLeafSides(openvdb::FloatTree& tree, float magnitude)
+{
+    using Leaf = openvdb::FloatTree::LeafNodeType;
+    constexpr int kDim = Leaf::DIM, kSize = int(Leaf::SIZE);
+    openvdb::tree::LeafManager<openvdb::FloatTree> leaves(tree);
+    leaves.foreach([magnitude](Leaf& leaf, std::size_t) {
+        if (leaf.isValueMaskOn()) return;  // no inactive voxel
+        std::array<std::int16_t, kSize> queue;
+        std::array<std::uint8_t, kSize> done{};
+        int tail = 0;
+        for (auto it = leaf.cbeginValueOn(); it; ++it) {
+            queue[tail++] = std::int16_t(it.pos());
+            done[it.pos()] = 1;
+        }
+        for (int head = 0; head < tail; ++head) {
+            const int n = queue[head];
+            const int x = n / (kDim * kDim), y = (n / kDim) % kDim, z = n % kDim;
+            const bool inside = leaf.getValue(openvdb::Index(n)) < 0;
+            const auto visit = [&](int m) {
+                if (done[m]) return;
+                done[m] = 1;
+                leaf.setValueOnly(openvdb::Index(m), inside ? -magnitude : magnitude);
+                queue[tail++] = std::int16_t(m);
+            };
+            if (x > 0) visit(n - kDim * kDim);
+            if (x < kDim - 1) visit(n + kDim * kDim);
+            if (y > 0) visit(n - kDim);
+            if (y < kDim - 1) visit(n + kDim);
+            if (z > 0) visit(n - 1);
+            if (z < kDim - 1) visit(n + 1);
+        }
+    });
 }
 
 } // namespace msii::detail

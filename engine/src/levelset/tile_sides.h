@@ -17,4 +17,15 @@ namespace msii::detail {
 void fillTileSides(openvdb::FloatTree& tree, const openvdb::CoordBBox& voxelBox, float outside,
                    float inside, const openvdb::MaskTree* guessed = nullptr);
 
+/// Gives every inactive voxel of every leaf node of @p tree the side (sign, with magnitude
+/// @p magnitude) of the nearest active voxel of its leaf, in steps between face neighbours
+/// (breadth first; ties go to the first found, in a fixed order).
+///
+/// OpenVDB's signed flood fill scans each leaf along its axes instead, which assumes that
+/// the band separates the two sides everywhere: next to an open border, where the surface
+/// ends, its scan lines wrap around the border and can mark voxels above the surface as
+/// inside (how depends on the grid's orientation). The nearest band voxel lies next to the
+/// nearest surface point, so its side is the right one there. Deterministic.
+void fillLeafSides(openvdb::FloatTree& tree, float magnitude);
+
 } // namespace msii::detail

@@ -36,7 +36,7 @@ struct VolumeSphereOptions {
     double minVoxelsPerRadius = 6.0;
     bool computeSphere = true;       ///< also S (costs about as much again as V alone)
     /// Per-vertex distance to the nearest border (mesh/border_distance.h); empty = closed.
-    /// Radius r_j of vertex i is masked (NaN) when r_j + 1.5 h_level > borderDistance[i].
+    /// Radius r_j of vertex i is masked (NaN) when r_j + 4 h_level + 2 h_0 > borderDistance[i].
     std::vector<double> borderDistance;
 };
 

@@ -11,10 +11,14 @@
 /// - open mesh (one-sided scan, terrain): the side behind the oriented surface, as far as
 ///   it is defined; beyond the border the sign is unreliable, so results whose ball reaches
 ///   the border are masked (invariants/volume_sphere.h).
-/// Signs come from angle-weighted pseudo-normals of the closest triangle feature
-/// (Baerentzen & Aanaes), exact for consistently oriented meshes. Beyond the band they are
-/// spread from the band's faces, breadth first (not by OpenVDB's axis-scanning flood fill,
-/// which fails next to open, tilted sheets), within 24 voxels of the mesh's bounding box.
+/// How: every voxel centre closer than halfWidth voxels to the mesh gets its exact distance
+/// to the closest triangle (triangles binned to 8³ blocks, src/levelset/band_raster.h) and
+/// the sign of that triangle's closest feature's angle-weighted pseudo-normal (Baerentzen &
+/// Aanaes), exact for consistently oriented meshes. Off the band, voxels of the band's leaf
+/// nodes take the side of their nearest band voxel, and the space around the mesh takes the
+/// side of the band's faces, breadth first over 8³ blocks (src/levelset/tile_sides.h). Both
+/// replace OpenVDB's axis-scanning flood fill, which assumes a closed surface and fails next
+/// to open borders and tilted open sheets.
 
 #include <msii/core/progress.h>
 #include <msii/mesh/trimesh.h>
