@@ -91,18 +91,6 @@ Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const Band
     blockFirst.push_back(pairs.size());
     const std::size_t numBlocks = blockFirst.size() - 1;
 
-    // Per triangle: bounding sphere (centroid, radius) for the cheap rejection.
-    std::vector<std::pair<Vec3, double>> spheres(nf);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf), [&](const auto& r) {
-        for (std::size_t f = r.begin(); f < r.end(); ++f) {
-            const auto& t = mesh.triangles[f];
-            const Vec3 c = (mesh.points[t[0]] + mesh.points[t[1]] + mesh.points[t[2]]) / 3.0;
-            double r2 = 0;
-            for (auto v : t) r2 = std::max(r2, squaredNorm(mesh.points[v] - c));
-            spheres[f] = {c, std::sqrt(r2)};
-        }
-    });
-
     // Blocks: the closest triangle of every voxel, then the signed distance.
     std::vector<std::unique_ptr<Leaf>> leaves(numBlocks);
     std::vector<std::unique_ptr<MaskLeaf>> guessed(numBlocks);
@@ -122,8 +110,8 @@ Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const Band
                 const VoxelRange v = rangeOf(f);
                 const Vec3& a = mesh.points[mesh.triangles[f][0]];
                 const Vec3& n = distance.faceNormal(f);
-                const Vec3& centre = spheres[f].first;
-                const double radius = spheres[f].second, radius2 = radius * radius;
+                const Vec3& centre = distance.boundingSphere(f).centre;
+                const double radius = distance.boundingSphere(f).radius, radius2 = radius * radius;
                 std::array<int, 3> lo, hi;
                 for (int k = 0; k < 3; ++k) {
                     lo[k] = std::max(v.lo[k], origin[k]) - origin[k];

@@ -51,11 +51,16 @@ MeshDistance::MeshDistance(const TriMesh& mesh) : mMesh(mesh)
 {
     const std::size_t nv = mesh.numVertices(), nf = mesh.numTriangles();
     mFaceNormal.resize(nf);
+    mBoundingSphere.resize(nf);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf), [&](const auto& r) {
         for (std::size_t f = r.begin(); f < r.end(); ++f) {
             const auto& t = mesh.triangles[f];
             mFaceNormal[f] = normalized(cross(mesh.points[t[1]] - mesh.points[t[0]],
                                               mesh.points[t[2]] - mesh.points[t[0]]));
+            const Vec3 c = (mesh.points[t[0]] + mesh.points[t[1]] + mesh.points[t[2]]) / 3.0;
+            double r2 = 0;
+            for (auto v : t) r2 = std::max(r2, squaredNorm(mesh.points[v] - c));
+            mBoundingSphere[f] = {c, std::sqrt(r2) * (1 + 1e-9)};
         }
     });
     mFirst.assign(nv + 1, 0);
@@ -229,15 +234,10 @@ void MeshDistance::buildGrid(double cellSize) const
     mGridDims = dims();
     mGridOrigin = lo;
 
-    mBoundingSphere.resize(nf);
     std::vector<std::array<std::int64_t, 6>> range(nf);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf), [&](const auto& r) {
         for (std::size_t f = r.begin(); f < r.end(); ++f) {
             const auto& t = mMesh.triangles[f];
-            const Vec3 c = (mMesh.points[t[0]] + mMesh.points[t[1]] + mMesh.points[t[2]]) / 3.0;
-            double r2 = 0;
-            for (auto v : t) r2 = std::max(r2, squaredNorm(mMesh.points[v] - c));
-            mBoundingSphere[f] = {c.x, c.y, c.z, std::sqrt(r2) * (1 + 1e-9)};
             for (int a = 0; a < 3; ++a) {
                 double tlo = mMesh.points[t[0]][a], thi = tlo;
                 for (int k = 1; k < 3; ++k) {
@@ -287,9 +287,9 @@ double MeshDistance::exactSignedDistance(const Vec3& x, std::int64_t startVertex
                 const std::size_t c = std::size_t((cx * mGridDims[1] + cy) * mGridDims[2] + cz);
                 for (auto i = mCellFirst[c]; i < mCellFirst[c + 1]; ++i) {
                     const std::uint32_t f = mCellTris[i];
-                    const auto& s = mBoundingSphere[f];
-                    const double dx = x.x - s[0], dy = x.y - s[1], dz = x.z - s[2];
-                    const double limit = bestDistance + s[3];
+                    const BoundingSphere& s = mBoundingSphere[f];
+                    const double dx = x.x - s.centre.x, dy = x.y - s.centre.y, dz = x.z - s.centre.z;
+                    const double limit = bestDistance + s.radius;
                     const double centre2 = dx * dx + dy * dy + dz * dz;
                     if (centre2 > limit * limit) continue;
                     // Tighter: the distance to the triangle's plane and, within the plane,
@@ -297,7 +297,8 @@ double MeshDistance::exactSignedDistance(const Vec3& x, std::int64_t startVertex
                     const Vec3& n = mFaceNormal[f];
                     const double plane = dx * n.x + dy * n.y + dz * n.z;
                     const double plane2 = plane * plane, lateral2 = centre2 - plane2;
-                    const double gap = lateral2 > s[3] * s[3] ? std::sqrt(lateral2) - s[3] : 0.0;
+                    const double gap =
+                        lateral2 > s.radius * s.radius ? std::sqrt(lateral2) - s.radius : 0.0;
                     if (plane2 + gap * gap > best.squaredDistance) continue;
                     const Closest c2 = closestOnFace(x, f);
                     // Ties (the same point reached through several faces) keep the lowest

@@ -46,6 +46,14 @@ public:
     /// consistently oriented mesh. @p onBorder as in signedDistance().
     double signedFromClosest(const Vec3& x, const Closest& c, bool* onBorder = nullptr) const;
 
+    /// A sphere around triangle @p f: centred at its centroid, through its farthest vertex
+    /// (for quick rejections: no point of the triangle is closer than |x − centre| − radius).
+    struct BoundingSphere {
+        Vec3 centre;
+        double radius = 0;
+    };
+    const BoundingSphere& boundingSphere(std::size_t f) const { return mBoundingSphere[f]; }
+
     /// Unit normal of triangle @p f, pointing out of the solid.
     const Vec3& faceNormal(std::size_t f) const { return mFaceNormal[f]; }
 
@@ -60,15 +68,14 @@ private:
 
     const TriMesh& mMesh;
     // Uniform grid of triangles over the mesh's bounding box, built on first use: cell c
-    // holds mCellTris[mCellFirst[c] .. mCellFirst[c + 1]), and every triangle has a bounding
-    // sphere (centroid, radius) for a quick rejection.
+    // holds mCellTris[mCellFirst[c] .. mCellFirst[c + 1]).
     mutable std::once_flag mGridOnce;
     mutable double mCell = 0;
     mutable Vec3 mGridOrigin;
     mutable std::array<std::int64_t, 3> mGridDims{};
     mutable std::vector<std::uint32_t> mCellFirst, mCellTris;
-    mutable std::vector<std::array<double, 4>> mBoundingSphere;
     std::vector<Vec3> mFaceNormal, mVertexNormal;
+    std::vector<BoundingSphere> mBoundingSphere;
     std::vector<std::uint32_t> mFirst, mFaces;  // vertex -> incident faces (CSR)
     std::vector<std::uint8_t> mBorderVertex;    // 1 for vertices on a border edge
 };
