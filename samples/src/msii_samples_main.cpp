@@ -117,9 +117,7 @@ int main(int argc, char** argv)
 
     try {
         app.parse(argc, argv);
-    } catch (const CLI::CallForHelp& e) {
-        return app.exit(e);
-    } catch (const CLI::CallForAllHelp& e) {
+    } catch (const CLI::Success& e) {  // --help, --help-all
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
         return fail(2, e.what());

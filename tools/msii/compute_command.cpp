@@ -3,6 +3,7 @@
 
 #include <msii/core/errors.h>
 #include <msii/core/progress.h>
+#include <msii/core/stopwatch.h>
 #include <msii/core/version.h>
 #include <msii/invariants/compute.h>
 #include <msii/io/atomic_file.h>
@@ -14,7 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
-#include <chrono>
+#include <iomanip>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -75,8 +76,7 @@ std::string radiusHint(const std::string& input)
 
 void computeOne(const ComputeArgs& args, const std::string& input, const std::string& output)
 {
-    using Clock = std::chrono::steady_clock;
-    const auto t0 = Clock::now();
+    const Stopwatch total;
     const std::string sidecar = sidecarPathFor(output);
     if (!args.overwrite && (fs::exists(output) || fs::exists(sidecar)))
         throw IOError("'" + output + "' exists already (use --overwrite to replace it)");
@@ -85,7 +85,7 @@ void computeOne(const ComputeArgs& args, const std::string& input, const std::st
 
     Progress progress(!args.quiet && Progress::stderrIsTerminal());
     ReadMeshResult read = readMesh(input);
-    const double readSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    const double readSeconds = total.seconds();
     const std::size_t inputFaces = read.mesh.numTriangles();
 
     ComputeOptions options;
@@ -109,7 +109,7 @@ void computeOne(const ComputeArgs& args, const std::string& input, const std::st
     const auto& inv = result.invariants;
     const std::size_t n = inv.radii.size();
 
-    const auto tWrite = Clock::now();
+    const Stopwatch write;
     WritePlyOptions plyOptions;
     std::ostringstream comment;
     comment << "msii " << versionString() << " compute R=" << args.radius << " N=" << n
@@ -118,7 +118,7 @@ void computeOne(const ComputeArgs& args, const std::string& input, const std::st
                "reaches the border; quality = V_NN";
     plyOptions.comments.push_back(comment.str());
     writePly(output, read.mesh, props, plyOptions);
-    const double writeSeconds = std::chrono::duration<double>(Clock::now() - tWrite).count();
+    const double writeSeconds = write.seconds();
 
     nlohmann::json j;
     j["program"] = "msii";
@@ -162,14 +162,14 @@ void computeOne(const ComputeArgs& args, const std::string& input, const std::st
                             {"level_set", t.levelSet}, {"occupancy", t.occupancy},
                             {"stencils", t.stencils},  {"interpolation", t.interpolation},
                             {"write", writeSeconds},
-                            {"total", std::chrono::duration<double>(Clock::now() - t0).count()}};
+                            {"total", total.seconds()}};
     j["warnings"] = result.warnings;
     writeTextFileAtomic(sidecar, j.dump(2) + "\n");
 
     if (!args.quiet)
         std::fprintf(stderr, "msii: %s -> %s (%zu vertices, %.1f s)\n", input.c_str(),
                      output.c_str(), st.numVertices,
-                     std::chrono::duration<double>(Clock::now() - t0).count());
+                     total.seconds());
 }
 
 } // namespace
@@ -209,7 +209,7 @@ std::function<int()> addComputeCommand(CLI::App& app)
         }
         if (!args->output.empty() && args->inputs.size() > 1)
             throw InvalidInputError("--output takes one input; use --output-dir for several");
-        if (args->threads < 0) throw InvalidInputError("--threads must be positive");
+        if (args->threads < 0) throw InvalidInputError("--threads must be 0 (all cores) or more");
         std::unique_ptr<tbb::global_control> limit;
         if (args->threads > 0)
             limit = std::make_unique<tbb::global_control>(

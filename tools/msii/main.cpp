@@ -4,7 +4,6 @@
 /// 2 for wrong usage, 1 for anything else.
 #include "commands.h"
 
-#include <msii/core/errors.h>
 #include <msii/core/version.h>
 
 #include <iostream>
@@ -18,11 +17,7 @@ int main(int argc, char** argv)
     auto runCompute = msii::tools::addComputeCommand(app);
     try {
         app.parse(argc, argv);
-    } catch (const CLI::CallForHelp& e) {
-        return app.exit(e);
-    } catch (const CLI::CallForAllHelp& e) {
-        return app.exit(e);
-    } catch (const CLI::CallForVersion& e) {
+    } catch (const CLI::Success& e) {  // --help, --help-all, --version
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
         std::cerr << "msii: error: " << e.what() << " (see msii --help)\n";
@@ -30,9 +25,6 @@ int main(int argc, char** argv)
     }
     try {
         if (app.got_subcommand("compute")) return runCompute();
-    } catch (const msii::Error& e) {
-        std::cerr << "msii: error: " << e.what() << '\n';
-        return 1;
     } catch (const std::bad_alloc&) {
         std::cerr << "msii: error: out of memory (try a larger --voxel-size)\n";
         return 1;

@@ -1,5 +1,6 @@
 #include <msii/core/progress.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <unistd.h>
 

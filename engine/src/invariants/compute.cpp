@@ -1,23 +1,15 @@
 #include <msii/invariants/compute.h>
 
 #include <msii/core/errors.h>
+#include <msii/core/stopwatch.h>
 #include <msii/invariants/scales.h>
 #include <msii/levelset/levelset.h>
 #include <msii/mesh/border_distance.h>
 
-#include <chrono>
 #include <cmath>
 #include <sstream>
 
 namespace msii {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t0)
-{
-    return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-} // namespace
 
 double chooseVoxelSize(double medianEdge, const std::vector<double>& radii,
                        double minVoxelsPerRadius)
@@ -33,7 +25,7 @@ double chooseVoxelSize(double medianEdge, const std::vector<double>& radii,
 
 ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Progress* progress)
 {
-    const auto tStart = Clock::now();
+    const Stopwatch total;
     if (!(options.radius > 0) || !std::isfinite(options.radius))
         throw InvalidInputError("the radius must be a positive number");
     if (options.scales < 1) throw InvalidInputError("the number of scales must be at least 1");
@@ -47,7 +39,7 @@ ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Pr
     if (mesh.numTriangles() == 0) throw InvalidInputError("the mesh has no faces");
 
     ComputeResult result;
-    auto t0 = Clock::now();
+    Stopwatch stage;
     result.check = checkMesh(mesh);
     if (result.check.numNonFinitePoints > 0) throw InvalidInputError(result.check.firstProblem());
     if (options.repair &&
@@ -69,7 +61,7 @@ ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Pr
         throw InvalidInputError(msg.str());
     }
     result.stats = computeMeshStats(mesh);
-    result.timings.check = secondsSince(t0);
+    result.timings.check = stage.seconds();
 
     const std::vector<double> radii = equidistantRadii(options.radius, options.scales);
     const double diagonal = result.stats.diagonal;
@@ -98,7 +90,7 @@ ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Pr
         result.warnings.push_back(msg.str());
     }
 
-    t0 = Clock::now();
+    stage.restart();
     LevelSetOptions lsOptions;
     lsOptions.voxelSize = result.voxelSize;
     lsOptions.halfWidth = 2;  // occupancy reads φ within 1 voxel and its neighbours'
@@ -106,7 +98,7 @@ ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Pr
     result.bandHalfWidth = lsOptions.halfWidth;
     result.levelSetVoxels = levelSet.info().activeVoxels;
     result.levelSetBytes = levelSet.info().memoryBytes;
-    result.timings.levelSet = secondsSince(t0);
+    result.timings.levelSet = stage.seconds();
 
     VolumeSphereOptions vsOptions;
     vsOptions.radii = radii;
@@ -119,7 +111,7 @@ ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Pr
     result.timings.occupancy = result.invariants.occupancySeconds;
     result.timings.stencils = result.invariants.stencilSeconds;
     result.timings.interpolation = result.invariants.interpolationSeconds;
-    result.timings.total = secondsSince(tStart);
+    result.timings.total = total.seconds();
     return result;
 }
 

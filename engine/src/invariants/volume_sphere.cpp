@@ -1,10 +1,11 @@
 #include <msii/invariants/volume_sphere.h>
 
 #include "../levelset/levelset_impl.h"
-#include "cube_fraction.h"
 #include "../levelset/tile_sides.h"
+#include "cube_fraction.h"
 
 #include <msii/core/errors.h>
+#include <msii/core/stopwatch.h>
 
 #include <openvdb/tools/Dense.h>
 #include <openvdb/tree/LeafManager.h>
@@ -15,9 +16,9 @@
 
 #include <algorithm>
 #include <array>
-#include <memory>
-#include <chrono>
 #include <cmath>
+#include <limits>
+#include <memory>
 
 namespace msii {
 
@@ -27,12 +28,6 @@ using openvdb::Coord;
 using openvdb::CoordBBox;
 using openvdb::FloatTree;
 using openvdb::Int32Tree;
-using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point t0)
-{
-    return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 /// Half width of the shell kernel for S = dV/dr, in voxels of the radius' level.
 constexpr double kShellHalfWidth = 0.5;
@@ -60,8 +55,9 @@ LevelPlan planLevels(const std::vector<double>& radii, double h, double k)
 }
 
 // ---------------------------------------------------------------------------------------
-// Occupancy, stored as q = 1/2 - occupancy so that OpenVDB's signed flood fill can give
-// every voxel outside the band its side (q = +1/2 outside, -1/2 inside).
+// Occupancy, stored as q = 1/2 - occupancy, so that the sign of q is the side, as for the
+// distance (q = +1/2 outside, -1/2 inside): the level set's sides carry over, and
+// detail::fillTileSides() works on both.
 
 /// Level 0 from the signed distance field: fraction of each voxel inside the solid.
 FloatTree::Ptr occupancyFromDistance(const openvdb::FloatGrid& sdf)
@@ -86,8 +82,9 @@ FloatTree::Ptr occupancyFromDistance(const openvdb::FloatGrid& sdf)
             const auto at = [&](int dx, int dy, int dz) {
                 return double(acc.getValue(ijk.offsetBy(dx, dy, dz)));
             };
-            const double gx = at(1, 0, 0) - at(-1, 0, 0), gy = at(0, 1, 0) - at(0, -1, 0),
-                         gz = at(0, 0, 1) - at(0, 0, -1);
+            const double xp = at(1, 0, 0), xm = at(-1, 0, 0), yp = at(0, 1, 0),
+                         ym = at(0, -1, 0), zp = at(0, 0, 1), zm = at(0, 0, -1);
+            const double gx = xp - xm, gy = yp - ym, gz = zp - zm;
             const double g = std::sqrt(gx * gx + gy * gy + gz * gz);
             double occupancy;
             if (g < 1e-12) {
@@ -95,8 +92,7 @@ FloatTree::Ptr occupancyFromDistance(const openvdb::FloatGrid& sdf)
             } else {
                 // Mean curvature term: the surface bends away from its tangent plane by
                 // h²·Δφ/24 on average over a voxel cross-section (Δφ = 2H for a distance).
-                double lap = (at(1, 0, 0) + at(-1, 0, 0) + at(0, 1, 0) + at(0, -1, 0) +
-                              at(0, 0, 1) + at(0, 0, -1) - 6.0 * phi) / (h * h);
+                double lap = (xp + xm + yp + ym + zp + zm - 6.0 * phi) / (h * h);
                 lap = std::clamp(lap, -2.0 / h, 2.0 / h);
                 const double phiEff = phi + h * h * lap / 24.0;
                 occupancy = detail::cubeFraction(-phiEff / h, std::abs(gx) / g,
@@ -105,17 +101,17 @@ FloatTree::Ptr occupancyFromDistance(const openvdb::FloatGrid& sdf)
             it.setValue(float(0.5 - occupancy));
         }
     });
-    for (auto it = q->beginValueOff(); it; ++it) {
-        if (it.isTileValue()) it.setValue(it.getValue() < 0 ? -0.5f : 0.5f);
-    }
+    auto tiles = q->beginValueOff();
+    tiles.setMaxDepth(FloatTree::ValueOffIter::LEAF_DEPTH - 1);  // tiles only: leaves are done
+    for (; tiles; ++tiles) tiles.setValue(tiles.getValue() < 0 ? -0.5f : 0.5f);
     q->root().setBackground(0.5f, /*updateChildNodes=*/true);
     return q;
 }
 
 /// Level l+1 from level l: mean of the 2×2×2 children (exact for volume fractions). Every
 /// voxel of every coarse leaf is computed from the fine tree (whose tiles carry their side),
-/// so no coarse voxel's side has to be guessed; the coarse tree's tiles get theirs from its
-/// leaves afterwards (detail::fillTileSides).
+/// so no coarse voxel's side has to be guessed; the coarse tree's tiles get theirs from the
+/// finest level afterwards (copyTileSides).
 FloatTree::Ptr restrictOccupancy(const FloatTree& fine)
 {
     using Leaf = FloatTree::LeafNodeType;
@@ -258,8 +254,8 @@ Stencil makeStencil(const std::vector<double>& rho)  // radii in voxels of the l
 }
 
 /// Stencil sums for the kRow nodes of a row that starts at @p row in the dense block whose
-/// fastest axis runs along the row: V and S per radius, kRow floats each (one per node).
-/// The inner loops over kRow consecutive floats become single vector instructions; an AVX2
+/// fastest axis runs along the row: V and S per radius, kRow floats each (one per node);
+/// S only if @p sumS is not null. The inner loops over kRow consecutive floats become single vector instructions; an AVX2
 /// version is compiled beside the generic one and chosen at run time.
 __attribute__((target_clones("avx2", "default"))) void applyStencil(
     const Stencil& st, const std::vector<std::int32_t>& offsets, const float* row,
@@ -284,17 +280,16 @@ __attribute__((target_clones("avx2", "default"))) void applyStencil(
         for (int t = 0; t < kRow; ++t) groupSum[g * kRow + t] = a0[t] + a1[t];
     }
     const int nr = st.numRadii;
-    std::fill(sumV, sumV + nr * kRow, 0.0f);
-    std::fill(sumS, sumS + nr * kRow, 0.0f);
-    for (std::size_t g = 0; g < ng; ++g) {
-        const float* wv = st.wV.data() + g * nr;
-        const float* ws = st.wS.data() + g * nr;
-        const float* sum = groupSum + g * kRow;
-        for (int j = 0; j < nr; ++j)
-            for (int t = 0; t < kRow; ++t) {
-                sumV[j * kRow + t] += wv[j] * sum[t];
-                sumS[j * kRow + t] += ws[j] * sum[t];
-            }
+    for (int pass = 0; pass < (sumS ? 2 : 1); ++pass) {  // V, then S
+        const std::vector<float>& weights = pass == 0 ? st.wV : st.wS;
+        float* sums = pass == 0 ? sumV : sumS;
+        std::fill(sums, sums + nr * kRow, 0.0f);
+        for (std::size_t g = 0; g < ng; ++g) {
+            const float* w = weights.data() + g * nr;
+            const float* sum = groupSum + g * kRow;
+            for (int j = 0; j < nr; ++j)
+                for (int t = 0; t < kRow; ++t) sums[j * kRow + t] += w[j] * sum[t];
+        }
     }
 }
 
@@ -363,7 +358,7 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
         }
     });
 
-    auto t0 = Clock::now();
+    Stopwatch stage;
     if (progress) progress->start("occupancy", std::size_t(numLevels));
     // Tiles within reach of any vertex's stencil get their side from the band on the fine
     // level (blocks of 8 fine voxels), and coarse tiles copy the fine side: coarse blocks
@@ -388,7 +383,7 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
         if (progress) progress->advance();
     }
     if (progress) progress->end();
-    result.occupancySeconds = secondsSince(t0);
+    result.occupancySeconds = stage.seconds();
 
     for (int level = 0; level < numLevels; ++level) {
         const auto& levelRadii = plan.radiiOf[level];
@@ -400,7 +395,7 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
         const int nr = stencil.numRadii;
 
         // Voxel centres needed: the 8 corners of the level's cell around each vertex.
-        t0 = Clock::now();
+        stage.restart();
         const double scale = double(1 << level), shift = 0.5 * (scale - 1.0);
         std::vector<Coord> base(nv);
         std::vector<std::array<float, 3>> frac(nv);
@@ -433,7 +428,9 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
         // Stencil sums at every needed voxel centre, block by block: the block's occupancy
         // is copied densely with the axis along which its nodes fill the fewest rows as the
         // fastest one, and the stencil is applied row by row.
-        std::vector<float> nodeV(std::size_t(numNodes) * nr), nodeS(std::size_t(numNodes) * nr);
+        const bool sphere = options.computeSphere;
+        std::vector<float> nodeV(std::size_t(numNodes) * nr),
+            nodeS(sphere ? std::size_t(numNodes) * nr : 0);
         std::vector<float> nodePhi(numNodes);
         const FloatTree& occ = *occupancy[level];
         const int side = stencil.side;
@@ -492,7 +489,7 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
                             (std::size_t(u + stencil.reach) * side + std::size_t(v + stencil.reach)) *
                                 side + std::size_t(stencil.reach);
                         applyStencil(stencil, offsets, occupancyBlock + start, sc.groupSum.data(),
-                                     sc.sumV.data(), sc.sumS.data());
+                                     sc.sumV.data(), sphere ? sc.sumS.data() : nullptr);
                         for (int t = 0; t < kRow; ++t) {
                             const Coord local = axis == 2 ? Coord(u, v, t)
                                               : axis == 1 ? Coord(u, t, v)
@@ -502,7 +499,8 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
                             const std::size_t n = std::size_t(leaf.getValue(ijk));
                             for (int j = 0; j < nr; ++j) {
                                 nodeV[n * nr + j] = float(sc.sumV[j * kRow + t] / stencil.sumV[j]);
-                                nodeS[n * nr + j] = float(sc.sumS[j * kRow + t] / stencil.sumS[j]);
+                                if (sphere)
+                                    nodeS[n * nr + j] = float(sc.sumS[j * kRow + t] / stencil.sumS[j]);
                             }
                             // Signed distance of the voxel centre, for the surface correction:
                             // on the fine level straight from the (exact) band, on coarser
@@ -513,7 +511,7 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
                                 const openvdb::Vec3d w =
                                     sdf.transform().indexToWorld(fineIndexOf(ijk, level));
                                 nodePhi[n] = float(levelSet.impl().distance->exactSignedDistance(
-                                    Vec3(w.x(), w.y(), w.z()), seedVertex[n], 4.0 * h0));
+                                    Vec3(w.x(), w.y(), w.z()), std::uint32_t(seedVertex[n]), 4.0 * h0));
                             }
                         }
                     }
@@ -521,19 +519,19 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
             }
         });
         if (progress) progress->end();
-        result.stencilSeconds += secondsSince(t0);
+        result.stencilSeconds += stage.seconds();
 
         // Back to the vertices: trilinear interpolation of surface-corrected node values.
         // A node at signed distance x·r from the surface is moved onto it with the plane
         // model (surfaceVolume/surfaceSphere). The node's distance is modelled as
         // ψ = n·d + κ/2·|d_t|² (vertex normal n, offset d = node − vertex, d_t its tangential
-        // part), with κ fitted to the nodes' exact distances and capped at 1/r: V̂ and Ŝ are
+        // part), with κ fitted to the nodes' exact distances and capped at 0.5/r: V̂ and Ŝ are
         // averages over a ball of radius r, so the field they form cannot bend more sharply
         // than that, and sharp edges and corners (where the exact distance is a cone and
         // would imply κ ≈ 1/h) must not be corrected as if they were smooth. The linear part
         // n·d vanishes at the vertex under trilinear interpolation, so n's error matters
         // only through the curvature term.
-        t0 = Clock::now();
+        stage.restart();
         const double margin = 4.0 * hl + 2.0 * h0;
         const auto& distance = *levelSet.impl().distance;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
@@ -571,14 +569,14 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
                         const double psi = along[c] + 0.5 * kappa * tangential2[c];
                         const double x = std::clamp(psi / radii[j], -0.6, 0.6);
                         v += w[c] * surfaceVolume(nodeV[m * nr + k], x);
-                        s += w[c] * surfaceSphere(nodeS[m * nr + k], x);
+                        if (sphere) s += w[c] * surfaceSphere(nodeS[m * nr + k], x);
                     }
                     result.volume[j][i] = float(std::clamp(v, 0.0, 1.0));
-                    if (options.computeSphere) result.sphere[j][i] = float(std::clamp(s, 0.0, 1.0));
+                    if (sphere) result.sphere[j][i] = float(std::clamp(s, 0.0, 1.0));
                 }
             }
         });
-        result.interpolationSeconds += secondsSince(t0);
+        result.interpolationSeconds += stage.seconds();
     }
 
     for (const auto& column : result.volume)

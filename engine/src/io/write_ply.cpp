@@ -2,6 +2,7 @@
 
 #include <msii/core/errors.h>
 #include <msii/io/atomic_file.h>
+#include <msii/mesh/mesh_stats.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -67,34 +68,7 @@ inline void appendNumber(Buffer& buffer, T value, char sep)
 /// bounding box diagonal (e.g. scans in map coordinates with large offsets).
 bool needsDoublePoints(const std::vector<Vec3>& points)
 {
-    struct Box {
-        Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-                std::numeric_limits<double>::infinity()};
-        Vec3 hi = -lo;
-    };
-    const auto unite = [](Box a, const Box& b) {
-        for (int k = 0; k < 3; ++k) {
-            a.lo[k] = std::min(a.lo[k], b.lo[k]);
-            a.hi[k] = std::max(a.hi[k], b.hi[k]);
-        }
-        return a;
-    };
-    const Box box = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, points.size(), 1 << 14), Box{},
-        [&](const tbb::blocked_range<std::size_t>& r, Box b) {
-            for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                const Vec3& p = points[i];
-                if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
-                for (int k = 0; k < 3; ++k) {
-                    b.lo[k] = std::min(b.lo[k], p[k]);
-                    b.hi[k] = std::max(b.hi[k], p[k]);
-                }
-            }
-            return b;
-        },
-        unite);
-    const double diagonal = box.lo.x <= box.hi.x ? norm(box.hi - box.lo) : 0.0;
-    const double tolerance = 1e-7 * diagonal;
+    const double tolerance = 1e-7 * boundingBox(points).diagonal();
     return tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, points.size(), 1 << 14), false,
         [&](const tbb::blocked_range<std::size_t>& r, bool lossy) {
@@ -242,7 +216,7 @@ void writePly(const std::string& path, const TriMesh& mesh,
                     appendNumber(buffer, properties[i].values[v],
                                  (i + 1 == properties.size() && !hasList) ? '\n' : ' ');
                 if (hasList) {
-                    appendNumber(buffer, int(listLength), listLength == 0 ? '\n' : ' ');
+                    appendNumber(buffer, int(listLength), ' ');  // listLength > 0 here
                     for (std::size_t i = 0; i < listLength; ++i)
                         appendNumber(buffer, list[v * listLength + i], i + 1 == listLength ? '\n' : ' ');
                 }

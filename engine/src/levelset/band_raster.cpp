@@ -49,23 +49,24 @@ Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const Band
     const Vec3& o = options.origin;
     const std::size_t nf = mesh.numTriangles();
 
-    const auto rangeOf = [&](std::size_t f) {
-        const auto& t = mesh.triangles[f];
-        VoxelRange r;
-        for (int a = 0; a < 3; ++a) {
-            const double p0 = mesh.points[t[0]][a], p1 = mesh.points[t[1]][a],
-                         p2 = mesh.points[t[2]][a];
-            r.lo[a] = int(std::ceil((std::min({p0, p1, p2}) - o[a]) / h - w));
-            r.hi[a] = int(std::floor((std::max({p0, p1, p2}) - o[a]) / h + w));
+    std::vector<VoxelRange> ranges(nf);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf), [&](const auto& r) {
+        for (std::size_t f = r.begin(); f < r.end(); ++f) {
+            const auto& t = mesh.triangles[f];
+            for (int a = 0; a < 3; ++a) {
+                const double p0 = mesh.points[t[0]][a], p1 = mesh.points[t[1]][a],
+                             p2 = mesh.points[t[2]][a];
+                ranges[f].lo[a] = int(std::ceil((std::min({p0, p1, p2}) - o[a]) / h - w));
+                ranges[f].hi[a] = int(std::floor((std::max({p0, p1, p2}) - o[a]) / h + w));
+            }
         }
-        return r;
-    };
+    });
 
     // (block, triangle) pairs, sorted by block and then triangle.
     std::vector<std::size_t> first(nf + 1, 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf), [&](const auto& r) {
         for (std::size_t f = r.begin(); f < r.end(); ++f) {
-            const VoxelRange v = rangeOf(f);
+            const VoxelRange& v = ranges[f];
             std::size_t n = 1;
             for (int a = 0; a < 3; ++a) n *= std::size_t((v.hi[a] >> kLog2) - (v.lo[a] >> kLog2) + 1);
             first[f + 1] = n;
@@ -75,7 +76,7 @@ Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const Band
     std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs(first[nf]);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf), [&](const auto& r) {
         for (std::size_t f = r.begin(); f < r.end(); ++f) {
-            const VoxelRange v = rangeOf(f);
+            const VoxelRange& v = ranges[f];
             std::size_t k = first[f];
             for (int bx = v.lo[0] >> kLog2; bx <= v.hi[0] >> kLog2; ++bx)
                 for (int by = v.lo[1] >> kLog2; by <= v.hi[1] >> kLog2; ++by)
@@ -107,11 +108,12 @@ Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const Band
             }
             for (std::size_t i = blockFirst[b]; i < blockFirst[b + 1]; ++i) {
                 const std::uint32_t f = pairs[i].second;
-                const VoxelRange v = rangeOf(f);
+                const VoxelRange& v = ranges[f];
                 const Vec3& a = mesh.points[mesh.triangles[f][0]];
                 const Vec3& n = distance.faceNormal(f);
-                const Vec3& centre = distance.boundingSphere(f).centre;
-                const double radius = distance.boundingSphere(f).radius, radius2 = radius * radius;
+                const MeshDistance::BoundingSphere& sphere = distance.boundingSphere(f);
+                const Vec3& centre = sphere.centre;
+                const double radius = sphere.radius, radius2 = radius * radius;
                 std::array<int, 3> lo, hi;
                 for (int k = 0; k < 3; ++k) {
                     lo[k] = std::max(v.lo[k], origin[k]) - origin[k];

@@ -1,9 +1,9 @@
 #include "levelset_impl.h"
 #include "tile_sides.h"
 #include "band_raster.h"
-#include "mesh_distance.h"
 
 #include <msii/core/errors.h>
+#include <msii/mesh/mesh_stats.h>
 
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/SignedFloodFill.h>
@@ -27,7 +27,6 @@ void initializeOpenVdb()
 
 } // namespace
 
-LevelSet::LevelSet() = default;
 LevelSet::LevelSet(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
 LevelSet::~LevelSet() = default;
 LevelSet::LevelSet(LevelSet&&) noexcept = default;
@@ -52,12 +51,8 @@ LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options, Prog
         throw InvalidInputError("the narrow band must be at least 2 voxels wide");
     if (mesh.empty()) throw InvalidInputError("the mesh is empty");
 
-    Vec3 lo = mesh.points.front(), hi = lo;
-    for (const auto& p : mesh.points)
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], p[a]);
-            hi[a] = std::max(hi[a], p[a]);
-        }
+    const BoundingBox box = boundingBox(mesh.points);
+    const Vec3 &lo = box.min, &hi = box.max;
     for (int a = 0; a < 3; ++a) {
         if ((hi[a] - lo[a]) / h > double(1 << 20)) {
             std::ostringstream msg;
@@ -99,13 +94,13 @@ LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options, Prog
     openvdb::tools::signedFloodFill(grid->tree(), /*threaded=*/true, /*grainSize=*/1,
                                     /*minLevel=*/1);
     {
-        // The flood fill's sides are right for leaves; tiles near the mesh get theirs from
-        // the band (detail::fillTileSides), which also holds for open, tilted sheets.
-        openvdb::CoordBBox box(
+        // The flood fill's tile sides assume a closed surface; near the mesh they come from
+        // the band instead (detail::fillTileSides), which also holds for open, tilted sheets.
+        openvdb::CoordBBox sideBox(
             openvdb::Coord::floor(transform->worldToIndex(openvdb::Vec3d(lo.x, lo.y, lo.z))),
             openvdb::Coord::ceil(transform->worldToIndex(openvdb::Vec3d(hi.x, hi.y, hi.z))));
-        box.expand(kSidePadding);
-        detail::fillTileSides(grid->tree(), box, grid->background(), -grid->background(),
+        sideBox.expand(kSidePadding);
+        detail::fillTileSides(grid->tree(), sideBox, grid->background(), -grid->background(),
                               guessed.get());
     }
     if (progress) progress->advance();

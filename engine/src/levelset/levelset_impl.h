@@ -11,7 +11,9 @@
 namespace msii {
 
 struct LevelSet::Impl {
-    openvdb::FloatGrid::Ptr grid;  ///< world distance values, voxel (i,j,k) centred at (i,j,k)*h
+    /// World distance values. Voxel (i,j,k) is centred at (i,j,k)·h plus a shift of whole
+    /// 512-voxel blocks, so voxel centres lie at multiples of h in world coordinates.
+    openvdb::FloatGrid::Ptr grid;
     LevelSetInfo info;
     std::shared_ptr<const detail::MeshDistance> distance;  ///< exact distances off the band
     /// Band voxels beyond an open border (closest feature on the border): side is a guess.

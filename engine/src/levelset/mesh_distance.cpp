@@ -1,12 +1,12 @@
 #include "mesh_distance.h"
 
-#include <array>
+#include <msii/mesh/mesh_stats.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -136,30 +136,26 @@ Vec3 MeshDistance::pseudoNormal(std::uint32_t f, int feature) const
     }
 }
 
-double MeshDistance::signedDistance(const Vec3& x, std::int64_t startVertex,
-                                    std::uint32_t& face, bool* onBorder) const
+MeshDistance::Closest MeshDistance::descend(const Vec3& x, std::uint32_t startVertex) const
 {
-    double best = std::numeric_limits<double>::infinity();
-    Vec3 closest, bestPoint;
-    int feature = kFace, bestFeature = kFace;
-    std::uint32_t bestFace = face;
+    Closest best;
+    best.squaredDistance = std::numeric_limits<double>::infinity();
+    Vec3 closest;
+    int feature = kFace;
     const auto tryFacesOf = [&](std::uint32_t v) {
         bool improved = false;
         for (auto i = mFirst[v]; i < mFirst[v + 1]; ++i) {
             const auto g = mFaces[i];
             const double d = faceDistance(x, g, closest, feature);
-            if (d < best) {
-                best = d;
-                bestFace = g;
-                bestPoint = closest;
-                bestFeature = feature;
+            if (d < best.squaredDistance) {
+                best = Closest{d, closest, g, feature};
                 improved = true;
             }
         }
         return improved;
     };
-    // Descend: look at every triangle sharing a vertex with the current closest one; the
-    // triangles of a vertex are looked at once (a few vertices are remembered).
+    // Look at every triangle sharing a vertex with the current closest one; the triangles
+    // of a vertex are looked at once (a few vertices are remembered).
     std::array<std::uint32_t, 32> expanded;
     std::size_t numExpanded = 0;
     const auto expand = [&](std::uint32_t v) {
@@ -168,19 +164,14 @@ double MeshDistance::signedDistance(const Vec3& x, std::int64_t startVertex,
         if (numExpanded < expanded.size()) expanded[numExpanded++] = v;
         return tryFacesOf(v);
     };
-    if (startVertex >= 0) {
-        expand(std::uint32_t(startVertex));
-    } else {
-        best = faceDistance(x, face, bestPoint, bestFeature);
-    }
+    expand(startVertex);
     for (int step = 0; step < 256; ++step) {
-        const auto t = mMesh.triangles[bestFace];
+        const auto t = mMesh.triangles[best.face];
         bool improved = false;
         for (auto v : t) improved = expand(v) || improved;
         if (!improved) break;
     }
-    face = bestFace;
-    return signedFromClosest(x, Closest{best, bestPoint, bestFace, bestFeature}, onBorder);
+    return best;
 }
 
 MeshDistance::Closest MeshDistance::closestOnFace(const Vec3& x, std::uint32_t f) const
@@ -218,12 +209,8 @@ double MeshDistance::signedFromClosest(const Vec3& x, const Closest& c, bool* on
 void MeshDistance::buildGrid(double cellSize) const
 {
     const std::size_t nf = mMesh.numTriangles();
-    Vec3 lo = mMesh.points.front(), hi = lo;
-    for (const auto& p : mMesh.points)
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], p[a]);
-            hi[a] = std::max(hi[a], p[a]);
-        }
+    const BoundingBox box = boundingBox(mMesh.points);
+    const Vec3 &lo = box.min, &hi = box.max;
     mCell = cellSize;
     const auto dims = [&] {
         std::array<std::int64_t, 3> d;
@@ -249,9 +236,6 @@ void MeshDistance::buildGrid(double cellSize) const
             }
         }
     });
-    const auto cellIndex = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
-        return std::size_t((x * mGridDims[1] + y) * mGridDims[2] + z);
-    };
     mCellFirst.assign(std::size_t(mGridDims[0] * mGridDims[1] * mGridDims[2]) + 1, 0);
     for (std::size_t f = 0; f < nf; ++f)
         for (auto x = range[f][0]; x <= range[f][3]; ++x)
@@ -267,13 +251,11 @@ void MeshDistance::buildGrid(double cellSize) const
                     mCellTris[fill[cellIndex(x, y, z)]++] = std::uint32_t(f);
 }
 
-double MeshDistance::exactSignedDistance(const Vec3& x, std::int64_t startVertex,
+double MeshDistance::exactSignedDistance(const Vec3& x, std::uint32_t startVertex,
                                          double cellSize) const
 {
     std::call_once(mGridOnce, [&] { buildGrid(cellSize); });
-    std::uint32_t face = 0;
-    signedDistance(x, startVertex, face);
-    Closest best = closestOnFace(x, face);  // the descent's answer: an upper bound
+    Closest best = descend(x, startVertex);  // an upper bound
     double bestDistance = std::sqrt(best.squaredDistance);
     std::array<std::int64_t, 6> cells;
     for (int a = 0; a < 3; ++a) {
@@ -284,7 +266,7 @@ double MeshDistance::exactSignedDistance(const Vec3& x, std::int64_t startVertex
     for (auto cx = cells[0]; cx <= cells[3]; ++cx)
         for (auto cy = cells[1]; cy <= cells[4]; ++cy)
             for (auto cz = cells[2]; cz <= cells[5]; ++cz) {
-                const std::size_t c = std::size_t((cx * mGridDims[1] + cy) * mGridDims[2] + cz);
+                const std::size_t c = cellIndex(cx, cy, cz);
                 for (auto i = mCellFirst[c]; i < mCellFirst[c + 1]; ++i) {
                     const std::uint32_t f = mCellTris[i];
                     const BoundingSphere& s = mBoundingSphere[f];

@@ -15,21 +15,13 @@ public:
     /// Keeps a reference: @p mesh must outlive this object.
     explicit MeshDistance(const TriMesh& mesh);
 
-    /// Signed distance (negative inside the solid) from @p x to the mesh. Starts at the
-    /// triangles of vertex @p startVertex (or at @p face if startVertex < 0) and moves to
-    /// neighbouring triangles while they are closer: exact when the closest triangle is
-    /// reached by such a descent, which holds for points within the local feature size.
-    /// @param face  in: start face (used when startVertex < 0); out: the closest face
-    /// @param onBorder  if given, set when the closest feature is a vertex or edge of the
-    ///                  mesh's border (the side of x is then a guess: x lies beyond the border)
-    double signedDistance(const Vec3& x, std::int64_t startVertex, std::uint32_t& face,
-                          bool* onBorder = nullptr) const;
-
-    /// As signedDistance(), then made exact whatever the shape (sharp edges and corners give
-    /// the descent local minima): every triangle within the descent's distance is checked,
-    /// through a uniform grid of triangles built on first use with the given cell size
-    /// (enlarged if the grid would have more than 2^25 cells).
-    double exactSignedDistance(const Vec3& x, std::int64_t startVertex, double cellSize) const;
+    /// Signed distance (negative inside the solid) from @p x to the mesh, exact whatever
+    /// the shape. A descent from the triangles of vertex @p startVertex (moving to
+    /// neighbouring triangles while they are closer) gives a bound; sharp edges and corners
+    /// give the descent local minima, so every triangle within that bound is then checked,
+    /// through a uniform grid of triangles built on the first call with that call's
+    /// @p cellSize (enlarged if the grid would have more than 2^25 cells).
+    double exactSignedDistance(const Vec3& x, std::uint32_t startVertex, double cellSize) const;
 
     /// The closest point of one triangle to a point, and the feature (face, edge or vertex)
     /// it lies on.
@@ -43,7 +35,10 @@ public:
 
     /// Signed distance from @p x given its closest point on the whole mesh @p c: the sign
     /// is that of the pseudo-normal of c's feature (Baerentzen & Aanaes), exact for a
-    /// consistently oriented mesh. @p onBorder as in signedDistance().
+    /// consistently oriented mesh.
+    /// @param onBorder  if given, set when the closest feature is a vertex or edge of the
+    ///                  mesh's border and x lies off to its side (beyond the border, where
+    ///                  the side is a guess).
     double signedFromClosest(const Vec3& x, const Closest& c, bool* onBorder = nullptr) const;
 
     /// A sphere around triangle @p f: centred at its centroid, through its farthest vertex
@@ -62,9 +57,15 @@ public:
 
 private:
     double faceDistance(const Vec3& x, std::uint32_t f, Vec3& closest, int& feature) const;
+    /// The descent of exactSignedDistance(): a local minimum of the distance over triangles.
+    Closest descend(const Vec3& x, std::uint32_t startVertex) const;
     Vec3 pseudoNormal(std::uint32_t f, int feature) const;
 
     void buildGrid(double cellSize) const;
+    std::size_t cellIndex(std::int64_t x, std::int64_t y, std::int64_t z) const
+    {
+        return std::size_t((x * mGridDims[1] + y) * mGridDims[2] + z);
+    }
 
     const TriMesh& mMesh;
     // Uniform grid of triangles over the mesh's bounding box, built on first use: cell c

@@ -1,5 +1,7 @@
 #include <msii/mesh/mesh_check.h>
 
+#include "blocks.h"
+
 #include <msii/core/errors.h>
 
 #include <tbb/parallel_for.h>
@@ -14,18 +16,8 @@ namespace msii {
 
 namespace {
 
-/// Fixed block size for parallel loops whose partial results are combined in block order.
-constexpr std::size_t kBlock = 1 << 14;
-
-template <class Body>
-void forEachBlock(std::size_t count, const Body& body)
-{
-    const std::size_t numBlocks = (count + kBlock - 1) / kBlock;
-    tbb::parallel_for(std::size_t(0), numBlocks,
-                      [&](std::size_t b) { body(b, b * kBlock, std::min(count, (b + 1) * kBlock)); });
-}
-
-bool isFinite(const Vec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+using detail::forEachBlock;
+using detail::numBlocks;
 
 enum FaceStatus : std::uint8_t { kGood = 0, kDegenerate = 1, kDuplicate = 2 };
 
@@ -127,7 +119,7 @@ MeshCheckResult checkMesh(const TriMesh& mesh, const MeshCheckOptions& options)
 
     // Non-finite points.
     {
-        std::vector<std::size_t> counts((numVertices + kBlock - 1) / kBlock, 0);
+        std::vector<std::size_t> counts(numBlocks(numVertices), 0);
         forEachBlock(numVertices, [&](std::size_t b, std::size_t begin, std::size_t end) {
             for (std::size_t v = begin; v < end; ++v)
                 if (!isFinite(points[v])) ++counts[b];
@@ -193,8 +185,7 @@ MeshCheckResult checkMesh(const TriMesh& mesh, const MeshCheckOptions& options)
                 add(v[0], FaceRest{v[1], v[2], std::uint32_t(f)});
             },
             offsets, rests);
-        const std::size_t numBlocks = (numVertices + kBlock - 1) / kBlock;
-        std::vector<EdgeBlock> blocks(numBlocks);
+        std::vector<EdgeBlock> blocks(numBlocks(numVertices));
         forEachBlock(numVertices, [&](std::size_t b, std::size_t begin, std::size_t end) {
             for (std::size_t v = begin; v < end; ++v) {
                 const auto first = rests.begin() + offsets[v], last = rests.begin() + offsets[v + 1];
@@ -229,8 +220,7 @@ MeshCheckResult checkMesh(const TriMesh& mesh, const MeshCheckOptions& options)
             },
             offsets, halfedges);
         numGoodFaces = halfedges.size() / 3;
-        const std::size_t numBlocks = (numVertices + kBlock - 1) / kBlock;
-        std::vector<EdgeBlock> blocks(numBlocks);
+        std::vector<EdgeBlock> blocks(numBlocks(numVertices));
         forEachBlock(numVertices, [&](std::size_t b, std::size_t begin, std::size_t end) {
             EdgeBlock& block = blocks[b];
             for (std::size_t v = begin; v < end; ++v) {

@@ -1,31 +1,35 @@
 #include <msii/mesh/mesh_stats.h>
 
-#include <tbb/parallel_for.h>
+#include "blocks.h"
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <vector>
 
 namespace msii {
 
-namespace {
-
-/// Work is split into blocks of this many items whatever the thread count, and partial
-/// results are combined in block order: the sums do not depend on scheduling.
-constexpr std::size_t kBlock = 1 << 14;
-
-bool isFinite(const Vec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
-
-struct BlockSums {
-    Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-            std::numeric_limits<double>::infinity()};
-    Vec3 hi = -lo;
-    double edgeSum = 0, area = 0;
-    std::size_t numEdges = 0;
-};
-
-} // namespace
+BoundingBox boundingBox(const std::vector<Vec3>& points)
+{
+    std::vector<BoundingBox> blocks(detail::numBlocks(points.size()));
+    detail::forEachBlock(points.size(), [&](std::size_t b, std::size_t begin, std::size_t end) {
+        BoundingBox& box = blocks[b];
+        for (std::size_t i = begin; i < end; ++i) {
+            const Vec3& p = points[i];
+            if (!isFinite(p)) continue;
+            for (int k = 0; k < 3; ++k) {
+                box.min[k] = std::min(box.min[k], p[k]);
+                box.max[k] = std::max(box.max[k], p[k]);
+            }
+        }
+    });
+    BoundingBox box;
+    for (const BoundingBox& block : blocks)
+        for (int k = 0; k < 3; ++k) {
+            box.min[k] = std::min(box.min[k], block.min[k]);
+            box.max[k] = std::max(box.max[k], block.max[k]);
+        }
+    return box;
+}
 
 MeshStats computeMeshStats(const TriMesh& mesh)
 {
@@ -35,43 +39,24 @@ MeshStats computeMeshStats(const TriMesh& mesh)
     const auto& points = mesh.points;
     const auto& triangles = mesh.triangles;
 
-    // Bounding box over finite points.
-    const std::size_t numPointBlocks = (points.size() + kBlock - 1) / kBlock;
-    std::vector<BlockSums> pointBlocks(numPointBlocks);
-    tbb::parallel_for(std::size_t(0), numPointBlocks, [&](std::size_t b) {
-        BlockSums& sums = pointBlocks[b];
-        const std::size_t end = std::min(points.size(), (b + 1) * kBlock);
-        for (std::size_t i = b * kBlock; i < end; ++i) {
-            const Vec3& p = points[i];
-            if (!isFinite(p)) continue;
-            for (int k = 0; k < 3; ++k) {
-                sums.lo[k] = std::min(sums.lo[k], p[k]);
-                sums.hi[k] = std::max(sums.hi[k], p[k]);
-            }
-        }
-    });
-    BlockSums box;
-    for (const BlockSums& sums : pointBlocks) {
-        for (int k = 0; k < 3; ++k) {
-            box.lo[k] = std::min(box.lo[k], sums.lo[k]);
-            box.hi[k] = std::max(box.hi[k], sums.hi[k]);
-        }
-    }
-    if (box.lo.x <= box.hi.x) {
-        stats.bboxMin = box.lo;
-        stats.bboxMax = box.hi;
-        stats.diagonal = norm(box.hi - box.lo);
+    const BoundingBox box = boundingBox(points);
+    if (!box.empty()) {
+        stats.bboxMin = box.min;
+        stats.bboxMax = box.max;
+        stats.diagonal = box.diagonal();
     }
 
     // Edge lengths (every edge of every face, so interior edges count twice) and areas.
     // Edges with a non-finite or out-of-range end are left out, as are such faces' areas.
+    struct FaceSums {
+        double edgeSum = 0, area = 0;
+        std::size_t numEdges = 0;
+    };
     std::vector<double> lengths(3 * triangles.size(), -1.0);
-    const std::size_t numFaceBlocks = (triangles.size() + kBlock - 1) / kBlock;
-    std::vector<BlockSums> faceBlocks(numFaceBlocks);
-    tbb::parallel_for(std::size_t(0), numFaceBlocks, [&](std::size_t b) {
-        BlockSums& sums = faceBlocks[b];
-        const std::size_t end = std::min(triangles.size(), (b + 1) * kBlock);
-        for (std::size_t f = b * kBlock; f < end; ++f) {
+    std::vector<FaceSums> faceBlocks(detail::numBlocks(triangles.size()));
+    detail::forEachBlock(triangles.size(), [&](std::size_t b, std::size_t begin, std::size_t end) {
+        FaceSums& sums = faceBlocks[b];
+        for (std::size_t f = begin; f < end; ++f) {
             const Triangle& t = triangles[f];
             bool valid[3];
             for (int k = 0; k < 3; ++k) valid[k] = t[k] < points.size() && isFinite(points[t[k]]);
@@ -91,7 +76,7 @@ MeshStats computeMeshStats(const TriMesh& mesh)
     });
     double edgeSum = 0, area = 0;
     std::size_t numEdges = 0;
-    for (const BlockSums& sums : faceBlocks) {
+    for (const FaceSums& sums : faceBlocks) {
         edgeSum += sums.edgeSum;
         area += sums.area;
         numEdges += sums.numEdges;

@@ -723,7 +723,7 @@ int findIndexProperty(const std::string& path, const PlyElement& element)
 }
 
 template <class Source>
-void readBody(Source& source, bool binaryFastPaths, const std::string& path, const PlyHeader& header,
+void readBody(Source& source, const std::string& path, const PlyHeader& header,
               const PlyElement& vertexElement, const ReadMeshOptions& options, ReadMeshResult& result,
               std::size_t remainingBytes)
 {
@@ -744,7 +744,7 @@ void readBody(Source& source, bool binaryFastPaths, const std::string& path, con
             mesh.points.assign(element.count, Vec3{});
             const std::vector<int> targets = vertexTargets(element, options, result.vertexProperties);
             if constexpr (isBinary) {
-                if (binaryFastPaths && !element.hasLists()) {
+                if (!element.hasLists()) {
                     readVerticesFixed(source, context, element, targets, mesh, result.vertexProperties);
                     continue;
                 }
@@ -757,7 +757,7 @@ void readBody(Source& source, bool binaryFastPaths, const std::string& path, con
             if (!strips) mesh.triangles.reserve(mesh.triangles.size() + element.count);
             if constexpr (isBinary) {
                 const PlyProperty& first = element.properties[0];
-                if (binaryFastPaths && !strips && element.properties.size() == 1 &&
+                if (!strips && element.properties.size() == 1 &&
                     first.countType == PlyType::UInt8 &&
                     (first.type == PlyType::Int32 || first.type == PlyType::UInt32)) {
                     readFacesFast(source, context, element, builder, mesh.triangles, vertexElement.count);
@@ -802,19 +802,19 @@ ReadMeshResult readPly(const std::string& path, const ReadMeshOptions& options)
     case PlyFormat::Ascii: {
         result.format = "ply-ascii";
         AsciiSource source(begin, end, context);
-        readBody(source, false, path, header, *vertexElement, options, result, remaining);
+        readBody(source, path, header, *vertexElement, options, result, remaining);
         break;
     }
     case PlyFormat::BinaryLittleEndian: {
         result.format = "ply-binary";
         BinarySource<false> source(begin, end, context);
-        readBody(source, true, path, header, *vertexElement, options, result, remaining);
+        readBody(source, path, header, *vertexElement, options, result, remaining);
         break;
     }
     case PlyFormat::BinaryBigEndian: {
         result.format = "ply-binary";
         BinarySource<true> source(begin, end, context);
-        readBody(source, true, path, header, *vertexElement, options, result, remaining);
+        readBody(source, path, header, *vertexElement, options, result, remaining);
         break;
     }
     }

@@ -178,8 +178,9 @@ void checkReadable(const std::string& path)
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0) throw IOError("cannot open '" + path + "': " + std::strerror(errno) + ".");
     struct stat st {};
-    const bool isFolder = ::fstat(fd, &st) == 0 && S_ISDIR(st.st_mode);
-    const bool isEmpty = ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size == 0;
+    const bool known = ::fstat(fd, &st) == 0;
+    const bool isFolder = known && S_ISDIR(st.st_mode);
+    const bool isEmpty = known && S_ISREG(st.st_mode) && st.st_size == 0;
     ::close(fd);
     if (isFolder) throw IOError("cannot read '" + path + "': it is a folder.");
     if (isEmpty) throw InvalidInputError("'" + path + "' is empty.");

@@ -1,7 +1,7 @@
 #pragma once
 /// @file progress.h
 /// @brief Progress reporting for long stages, in the shape of OpenVDB's interrupter
-/// (start / update / end). Shown on a terminal (stderr is a TTY), silent in scripts.
+/// (start / advance / end). Shown on a terminal (stderr is a TTY), silent in scripts.
 
 #include <atomic>
 #include <chrono>
@@ -11,7 +11,7 @@
 namespace msii {
 
 /// A thread-safe progress line on stderr. Engine functions take a `Progress*` that may be
-/// null; they call start(), then update() from any thread, then end().
+/// null; they call start(), then advance() from any thread, then end().
 class Progress {
 public:
     /// @param enabled  false: never print. By default printing happens only when stderr is a

@@ -35,6 +35,7 @@ inline constexpr Vec3 cross(const Vec3& a, const Vec3& b)
 }
 inline double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
 inline double squaredNorm(const Vec3& a) { return dot(a, a); }
+inline bool isFinite(const Vec3& a) { return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z); }
 inline Vec3 normalized(const Vec3& a)
 {
     const double n = norm(a);

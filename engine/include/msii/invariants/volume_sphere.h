@@ -16,15 +16,16 @@
 ///    so a full ball gives exactly 1 and a plane through a voxel centre exactly 1/2.
 /// 4. Vertices: trilinear interpolation from the 8 surrounding voxel centres after removing
 ///    each centre's offset from the surface with the plane model
-///    (V̂ = 1/2 − 3x/4 + x³/4, Ŝ = (1 − x)/2, x = signed distance / r).
+///    (V̂ = 1/2 − 3x/4 + x³/4, Ŝ = (1 − x)/2, x = ψ / r), where ψ, the centre's distance
+///    from the surface, is the vertex normal's plane plus a curvature fitted to the centres'
+///    exact distances (capped at 0.5/r).
 /// All radii of one level share one pass over each stencil.
 
 #include <msii/core/progress.h>
 #include <msii/levelset/levelset.h>
 #include <msii/mesh/trimesh.h>
 
-#include <cstdint>
-#include <limits>
+#include <cstddef>
 #include <vector>
 
 namespace msii {
@@ -34,7 +35,7 @@ struct VolumeSphereOptions {
     /// Precision knob: a radius is evaluated on the coarsest grid with r/h at least this
     /// (errors fall roughly like (h/r)^2; cost per vertex grows like its cube).
     double minVoxelsPerRadius = 6.0;
-    bool computeSphere = true;       ///< also S (costs about as much again as V alone)
+    bool computeSphere = true;       ///< also S (shares the stencil pass with V)
     /// Per-vertex distance to the nearest border (mesh/border_distance.h); empty = closed.
     /// Radius r_j of vertex i is masked (NaN) when r_j + 4 h_level + 2 h_0 > borderDistance[i].
     std::vector<double> borderDistance;

@@ -17,13 +17,10 @@ public:
     AtomicFile(const AtomicFile&) = delete;
     AtomicFile& operator=(const AtomicFile&) = delete;
 
-    std::FILE* stream() { return mFile; }
     void write(const void* data, std::size_t bytes);  ///< @throw IOError (e.g. disk full)
     void write(const std::string& text) { write(text.data(), text.size()); }
     /// Flushes, closes and renames onto the target. @throw IOError
     void commit();
-
-    const std::string& target() const { return mTarget; }
 
 private:
     std::string mTarget, mTemp;

@@ -16,9 +16,10 @@
 /// the sign of that triangle's closest feature's angle-weighted pseudo-normal (Baerentzen &
 /// Aanaes), exact for consistently oriented meshes. Off the band, voxels of the band's leaf
 /// nodes take the side of their nearest band voxel, and the space around the mesh takes the
-/// side of the band's faces, breadth first over 8³ blocks (src/levelset/tile_sides.h). Both
-/// replace OpenVDB's axis-scanning flood fill, which assumes a closed surface and fails next
-/// to open borders and tilted open sheets.
+/// side of the band's faces, breadth first over 8³ blocks (src/levelset/tile_sides.h). Near
+/// the mesh both take the place of OpenVDB's axis-scanning flood fill (which assumes a closed
+/// surface and fails next to open borders and tilted open sheets); it still fills the tiles
+/// farther away.
 
 #include <msii/core/progress.h>
 #include <msii/mesh/trimesh.h>
@@ -43,7 +44,6 @@ class LevelSet {
 public:
     struct Impl;
 
-    LevelSet();
     explicit LevelSet(std::unique_ptr<Impl> impl);
     ~LevelSet();
     LevelSet(LevelSet&&) noexcept;
@@ -65,8 +65,8 @@ private:
 ///      band from the mesh itself).
 /// @pre the mesh passed checkMesh() (finite points, no degenerate faces) and is
 ///      consistently oriented.
-/// @throw InvalidInputError for a non-positive voxel size or a grid that would be absurdly
-///        large (more than ~2^31 voxels along an axis).
+/// @throw InvalidInputError for a non-positive voxel size, a half width below 2, an empty
+///        mesh, or a grid that would be absurdly large (more than 2^20 voxels along an axis).
 LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options,
                        Progress* progress = nullptr);
 

@@ -43,7 +43,7 @@ struct MeshCheckResult {
 };
 
 /// Analyses @p mesh (parallel with TBB; the result does not depend on the thread count).
-/// @throw InvalidInputError for meshes of more than 2^31 vertices.
+/// @throw InvalidInputError for meshes of more than 2^31 vertices or 2^32 edges.
 MeshCheckResult checkMesh(const TriMesh& mesh, const MeshCheckOptions& options = {});
 
 /// Removes the faces listed in check.degenerateFaces and check.duplicateFaces; returns how

@@ -5,17 +5,31 @@
 
 #include <msii/mesh/trimesh.h>
 
+#include <limits>
+#include <vector>
+
 namespace msii {
 
 struct MeshStats {
     std::size_t numVertices = 0, numTriangles = 0;
     Vec3 bboxMin, bboxMax;           ///< axis-aligned bounding box
     double diagonal = 0;             ///< bounding box diagonal
-    double minEdge = 0, medianEdge = 0, meanEdge = 0, maxEdge = 0; ///< over unique... all face edges
+    /// Over every edge of every face (interior edges count twice); the median is the lower one.
+    double minEdge = 0, medianEdge = 0, meanEdge = 0, maxEdge = 0;
     double area = 0;                 ///< total surface area
 };
 
 /// Computes the statistics (parallel, deterministic). Non-finite points are skipped.
 MeshStats computeMeshStats(const TriMesh& mesh);
+
+/// Axis-aligned bounding box of the finite points among @p points (parallel).
+struct BoundingBox {
+    Vec3 min{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+             std::numeric_limits<double>::infinity()};  ///< +infinity while empty
+    Vec3 max = -min;
+    bool empty() const { return !(min.x <= max.x); }
+    double diagonal() const { return empty() ? 0.0 : norm(max - min); }
+};
+BoundingBox boundingBox(const std::vector<Vec3>& points);
 
 } // namespace msii
