@@ -554,7 +554,7 @@ TriMesh makeSphere(const SphereOptions& options)
 {
     requirePositive(options.radius, "radius");
     requirePositive(options.spacing, "spacing");
-    if (!(std::isfinite(options.center.x) && std::isfinite(options.center.y) && std::isfinite(options.center.z)))
+    if (!isFinite(options.center))
         throw InvalidInputError("sample mesh: the sphere centre must be finite.");
     // 10 k^2 + 2 vertices on 4 pi R^2: k = sqrt(0.4 pi) R / spacing gives ~spacing^2 per vertex.
     const double kReal = std::round(std::sqrt(0.4 * kPi) * options.radius / options.spacing);
