@@ -8,30 +8,26 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cmath>
-#include <cstdlib>
+#include <cstddef>
+#include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <unistd.h>
 
+#include "../support/files.h"
 #include "../support/temp_dir.h"
 
 namespace fs = std::filesystem;
 using namespace msii;
+using msii::test::readFile;
 using msii::test::TempDir;
 
 namespace {
-
-std::string readFile(const std::string& path)
-{
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 /// A tetrahedron with float-exact but "awkward" coordinates, and 3 properties.
 struct Sample {

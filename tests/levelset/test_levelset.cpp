@@ -8,9 +8,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <utility>
 
+#include "../support/rotation.h"
+
 using namespace msii;
+using msii::test::Rotation;
 
 namespace {
 
@@ -57,12 +61,9 @@ TEST(LevelSet, BandIsExactAndSidesAreRightAroundSharpFeatures)
     co.side = 2;
     co.spacing = 0.3;
     TriMesh mesh = samples::makeCube(co);
-    const Vec3 axis = normalized(Vec3(2, -1, 3));
-    const double angle = 0.6, c = std::cos(angle), s = std::sin(angle);
-    const auto rotate = [&](const Vec3& p, double sign) {
-        return p * c + cross(axis, p) * (s * sign) + axis * (dot(axis, p) * (1 - c));
-    };
-    for (auto& p : mesh.points) p = rotate(p - Vec3(1, 1, 1), +1.0);  // centred, then turned
+    const Rotation rotate(normalized(Vec3(2, -1, 3)), 0.6);
+    const Rotation unrotate = rotate.inverse();
+    for (auto& p : mesh.points) p = rotate(p - Vec3(1, 1, 1));  // centred, then turned
     LevelSetOptions lo;
     lo.voxelSize = 0.1;
     lo.halfWidth = 2;
@@ -77,7 +78,7 @@ TEST(LevelSet, BandIsExactAndSidesAreRightAroundSharpFeatures)
                 for (const auto& t : mesh.triangles)
                     d = std::min(d, triangleDistance(p, mesh.points[t[0]], mesh.points[t[1]],
                                                      mesh.points[t[2]]));
-                const Vec3 q = rotate(p, -1.0);  // in the cube's own frame
+                const Vec3 q = unrotate(p);  // in the cube's own frame
                 const bool inside = std::max({std::abs(q.x), std::abs(q.y), std::abs(q.z)}) < 1.0;
                 const double value = ls.signedDistance(p);
                 if (d < 1e-9) continue;  // on the surface: either sign
@@ -151,11 +152,7 @@ TEST(LevelSet, SidesNextToAnOpenBorderFollowTheSurface)
     ho.spacing = 0.1;
     ho.noise = 0;
     TriMesh mesh = samples::makeHeightField(ho);
-    const Vec3 axis = normalized(Vec3(1, 2, 0.5));
-    const double angle = 0.5, c = std::cos(angle), s = std::sin(angle);
-    const auto rotate = [&](const Vec3& p) {
-        return p * c + cross(axis, p) * s + axis * (dot(axis, p) * (1 - c));
-    };
+    const Rotation rotate(normalized(Vec3(1, 2, 0.5)), 0.5);
     for (auto& p : mesh.points) p = rotate(p);
     LevelSetOptions lo;
     lo.voxelSize = 0.05;

@@ -7,8 +7,13 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
-#include <cmath>
+#include <array>
+#include <cstddef>
+#include <cstdint>
 #include <limits>
+#include <string>
+#include <utility>
+#include <vector>
 
 using namespace msii;
 

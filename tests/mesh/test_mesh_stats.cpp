@@ -6,6 +6,7 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 using namespace msii;

@@ -9,27 +9,22 @@
 
 #include <gtest/gtest.h>
 
+#include <cstddef>
 #include <cstdint>
-#include <cstdlib>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "../support/files.h"
 #include "../support/temp_dir.h"
 
-namespace fs = std::filesystem;
 using namespace msii;
+using msii::test::readFile;
 using msii::test::TempDir;
+using msii::test::writeFile;
 
 namespace {
-
-void writeFile(const std::string& path, const std::string& bytes)
-{
-    std::ofstream out(path, std::ios::binary);
-    out.write(bytes.data(), std::streamsize(bytes.size()));
-}
 
 /// Appends the bytes of @p value in little- or big-endian order.
 template <class T>
@@ -370,8 +365,7 @@ TEST(ReadMesh, TruncatedBinaryPly)
     TempDir dir;
     const std::string full = dir.file("full.ply");
     writePly(full, smallMesh(), {});
-    std::ifstream in(full, std::ios::binary);
-    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string bytes = readFile(full);
     const std::size_t header = bytes.find("end_header\n") + 11;
     // Cut inside the vertices, inside the faces, and one byte short.
     for (std::size_t keep : {header + 5, header + 5 * 12 + 7, bytes.size() - 1}) {
@@ -424,12 +418,8 @@ TEST(ReadMesh, FaceIndexOutOfRange)
         EXPECT_THROW(readMesh(dir.file(name)), InvalidInputError) << name;
 
     // The binary fast path checks too.
-    std::string bytes;
-    {
-        writePly(dir.file("ok.ply"), smallMesh(), {});
-        std::ifstream in(dir.file("ok.ply"), std::ios::binary);
-        bytes.assign((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    }
+    writePly(dir.file("ok.ply"), smallMesh(), {});
+    const std::string bytes = readFile(dir.file("ok.ply"));
     const std::size_t lastIndex = bytes.size() - 4;  // last index of the last face
     std::string bad = bytes;
     const std::int32_t five = 5;

@@ -12,24 +12,30 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <ios>
 #include <iterator>
 #include <limits>
-#include <sstream>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <unordered_map>
+#include <utility>
 #include <vector>
+
+#include "../support/files.h"
 
 using namespace msii;
 using namespace msii::samples;
+using msii::test::readFile;
 
 namespace {
 
@@ -611,12 +617,6 @@ struct RunResult {
     std::string out, err;
 };
 
-std::string slurp(const std::string& path)
-{
-    std::ifstream in(path);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 RunResult runSamples(const std::string& args)
 {
     // Unique names: ctest runs the tests of this file as parallel processes.
@@ -627,8 +627,8 @@ RunResult runSamples(const std::string& args)
     const int status = std::system(command.c_str());
     RunResult r;
     r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(out);
-    r.err = slurp(err);
+    r.out = readFile(out);
+    r.err = readFile(err);
     std::remove(out.c_str());
     std::remove(err.c_str());
     return r;

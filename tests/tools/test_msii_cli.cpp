@@ -8,18 +8,22 @@
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
+#include <string>
+#include <vector>
 
+#include "../support/files.h"
 #include "../support/temp_dir.h"
 
 namespace fs = std::filesystem;
 using namespace msii;
+using msii::test::readFile;
+using msii::test::writeFile;
 
 namespace {
 
@@ -42,18 +46,15 @@ RunResult runMsii(const std::string& args)
     const int status = std::system(cmd.c_str());
     RunResult r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream in(err);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    r.err = ss.str();
+    r.err = readFile(err.string());
     return r;
 }
 
 std::string writeText(const std::string& name, const std::string& text)
 {
-    const fs::path p = tempDir() / name;
-    std::ofstream(p) << text;
-    return p.string();
+    const std::string path = (tempDir() / name).string();
+    writeFile(path, text);
+    return path;
 }
 
 std::string smallPatch()
@@ -107,11 +108,9 @@ TEST(MsiiCli, ComputeWritesFeaturesAndSidecar)
     for (float v : res.vertexProperties[0].values) (std::isnan(v) ? masked : finite)++;
     EXPECT_GT(finite, 0u);
     EXPECT_GT(masked, 0u);
-    std::ifstream json(tempDir() / "good.json");
-    std::stringstream ss;
-    ss << json.rdbuf();
+    const std::string json = readFile((tempDir() / "good.json").string());
     for (const char* key : {"\"radii\"", "\"voxel_size\"", "\"timings_seconds\"", "\"version\"", "\"median\""})
-        EXPECT_NE(ss.str().find(key), std::string::npos) << key;
+        EXPECT_NE(json.find(key), std::string::npos) << key;
     // Existing output without --overwrite: refused.
     const RunResult again = runMsii("compute '" + smallPatch() + "' --radius 0.8 --scales 4 --output '" + out.string() + "'");
     EXPECT_NE(again.code, 0);
