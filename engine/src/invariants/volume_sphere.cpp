@@ -280,16 +280,26 @@ __attribute__((target_clones("avx2", "default"))) void applyStencil(
         for (int t = 0; t < kRow; ++t) groupSum[g * kRow + t] = a0[t] + a1[t];
     }
     const int nr = st.numRadii;
-    for (int pass = 0; pass < (sumS ? 2 : 1); ++pass) {  // V, then S
-        const std::vector<float>& weights = pass == 0 ? st.wV : st.wS;
-        float* sums = pass == 0 ? sumV : sumS;
-        std::fill(sums, sums + nr * kRow, 0.0f);
+    std::fill(sumV, sumV + nr * kRow, 0.0f);
+    if (!sumS) {
         for (std::size_t g = 0; g < ng; ++g) {
-            const float* w = weights.data() + g * nr;
+            const float* wv = st.wV.data() + g * nr;
             const float* sum = groupSum + g * kRow;
             for (int j = 0; j < nr; ++j)
-                for (int t = 0; t < kRow; ++t) sums[j * kRow + t] += w[j] * sum[t];
+                for (int t = 0; t < kRow; ++t) sumV[j * kRow + t] += wv[j] * sum[t];
         }
+        return;
+    }
+    std::fill(sumS, sumS + nr * kRow, 0.0f);
+    for (std::size_t g = 0; g < ng; ++g) {
+        const float* wv = st.wV.data() + g * nr;
+        const float* ws = st.wS.data() + g * nr;
+        const float* sum = groupSum + g * kRow;
+        for (int j = 0; j < nr; ++j)
+            for (int t = 0; t < kRow; ++t) {
+                sumV[j * kRow + t] += wv[j] * sum[t];
+                sumS[j * kRow + t] += ws[j] * sum[t];
+            }
     }
 }
 
