@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -158,6 +159,85 @@ TEST(ReadPly, BigEndianWithSkippedElementsAndProperties)
     ASSERT_EQ(result.vertexProperties.size(), 1u);  // the list `normal` is skipped
     EXPECT_EQ(result.vertexProperties[0].name, "quality");
     EXPECT_EQ(result.vertexProperties[0].values, std::vector<float>(4, 513.0f));
+}
+
+TEST(ReadPly, VertexListsKeptAsNumberedProperties)
+{
+    TempDir dir;
+    const std::string path = dir.file("lists.ply");
+    // Big endian, two lists of different types around a scalar (GigaMesh's feature_vector
+    // is `list uint8 float`); kept lists come after the scalars, in header order.
+    std::string bytes =
+        "ply\n"
+        "format binary_big_endian 1.0\n"
+        "element vertex 3\n"
+        "property float x\n"
+        "property float y\n"
+        "property float z\n"
+        "property list ushort double normal\n"
+        "property float quality\n"
+        "property list uint8 float feature_vector\n"
+        "element face 1\n"
+        "property list uchar int vertex_indices\n"
+        "end_header\n";
+    const bool big = true;
+    for (int v = 0; v < 3; ++v) {
+        for (float c : {float(v), float(v * v), 0.5f}) appendBinary(bytes, c, big);
+        appendBinary<std::uint16_t>(bytes, 1, big);
+        appendBinary(bytes, 0.25 * v, big);
+        appendBinary(bytes, -1.5f * float(v), big);
+        appendBinary<std::uint8_t>(bytes, 12);
+        for (int k = 0; k < 12; ++k) appendBinary(bytes, float(10 * v + k), big);
+    }
+    appendBinary<std::uint8_t>(bytes, 3);
+    for (std::int32_t v : {0, 1, 2}) appendBinary(bytes, v, big);
+    writeFile(path, bytes);
+
+    ReadMeshOptions options;
+    options.keepVertexLists = true;
+    ReadMeshResult result = readPly(path, options);
+    ASSERT_EQ(result.vertexProperties.size(), 1u + 12u);  // scalars need keepVertexProperties
+    EXPECT_EQ(result.vertexProperties[0].name, "normal_00");
+    EXPECT_EQ(result.vertexProperties[0].values, (std::vector<float>{0.0f, 0.25f, 0.5f}));
+    EXPECT_EQ(result.vertexProperties[1].name, "feature_vector_00");
+    EXPECT_EQ(result.vertexProperties[12].name, "feature_vector_11");
+    EXPECT_EQ(result.vertexProperties[12].values, (std::vector<float>{11.0f, 21.0f, 31.0f}));
+    EXPECT_EQ(result.mesh.points[2], Vec3(2, 4, 0.5));
+    EXPECT_EQ(result.mesh.triangles, (std::vector<Triangle>{{0, 1, 2}}));
+
+    options.keepVertexProperties = true;
+    result = readPly(path, options);
+    ASSERT_EQ(result.vertexProperties.size(), 2u + 12u);
+    EXPECT_EQ(result.vertexProperties[0].name, "quality");
+    EXPECT_EQ(result.vertexProperties[0].values, (std::vector<float>{0.0f, -1.5f, -3.0f}));
+    EXPECT_EQ(result.vertexProperties[1].name, "normal_00");
+    EXPECT_EQ(result.vertexProperties[7].name, "feature_vector_05");
+    EXPECT_EQ(result.vertexProperties[7].values, (std::vector<float>{5.0f, 15.0f, 25.0f}));
+
+    // Ascii; lists of different lengths are refused with the vertex named.
+    writeFile(path,
+              "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+              "property list uchar float feature_vector\nelement face 1\nproperty list uchar int vertex_indices\n"
+              "end_header\n0 0 0 2 0.5 nan\n1 0 0 2 -0.5 inf\n0 1 0 2 1e-3 0\n3 0 1 2\n");
+    result = readPly(path, options);
+    ASSERT_EQ(result.vertexProperties.size(), 2u);
+    EXPECT_EQ(result.vertexProperties[0].values, (std::vector<float>{0.5f, -0.5f, 1e-3f}));
+    EXPECT_TRUE(std::isnan(result.vertexProperties[1].values[0]));
+    EXPECT_TRUE(std::isinf(result.vertexProperties[1].values[1]));
+    writeFile(path,
+              "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+              "property list uchar float feature_vector\nelement face 1\nproperty list uchar int vertex_indices\n"
+              "end_header\n0 0 0 2 0.5 0.5\n1 0 0 2 0.5 0.5\n0 1 0 3 0.5 0.5 0.5\n3 0 1 2\n");
+    try {
+        readPly(path, options);
+        ADD_FAILURE() << "no exception";
+    } catch (const InvalidInputError& e) {
+        EXPECT_NE(std::string(e.what()).find("different lengths (2 values at vertex 1, 3 at vertex 3)"),
+                  std::string::npos)
+            << e.what();
+    }
+    options.keepVertexLists = false;  // skipped as before
+    EXPECT_TRUE(readPly(path, options).vertexProperties.empty());
 }
 
 TEST(ReadPly, LittleEndianSignedCountsAndSmallTypes)

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdlib>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -101,8 +102,10 @@ TEST(MsiiCli, ComputeWritesFeaturesAndSidecar)
     const ReadMeshResult res = readMesh(out.string(), ro);
     std::vector<std::string> names;
     for (const auto& p : res.vertexProperties) names.push_back(p.name);
-    const std::vector<std::string> expected{"V_01", "V_02", "V_03", "V_04", "S_01", "S_02", "S_03", "S_04", "quality"};
-    EXPECT_EQ(names, expected);
+    const std::vector<std::string> expected{"V_01", "V_02", "V_03", "V_04", "S_01", "S_02",
+                                            "S_03", "S_04", "P_01", "P_02", "P_03", "P_04",
+                                            "L_01", "L_02", "L_03", "L_04", "quality"};
+    ASSERT_EQ(names, expected);
     // Middle of a gently curved tablet: values near one half; near the border: NaN.
     std::size_t finite = 0, masked = 0;
     for (float v : res.vertexProperties[0].values) (std::isnan(v) ? masked : finite)++;
@@ -142,11 +145,75 @@ TEST(MsiiCli, BadInputFailsCleanly)
     expectCleanFailure(patch + " -r 1 -n 0", "scales");
     expectCleanFailure(patch + " -r 1 -n 100000", "scales");
     expectCleanFailure(patch + " -r 1e9", "radius");
+    expectCleanFailure(patch + " -r 1 --invariants V,Q", "unknown invariant 'Q'");
+    expectCleanFailure(patch + " -r 1 --invariants ,", "selects nothing");
+    expectCleanFailure(patch + " -r 1 --exact --vertices 0,99999999", "vertex 99999999 does not exist");
+    expectCleanFailure(patch + " -r 1 --exact --vertices 0,x7", "'x7' is not a vertex index");
+    expectCleanFailure(patch + " -r 1 --exact --vertices -3", "'-3' is not a vertex index");
+    expectCleanFailure(patch + " -r 1 --exact --random-vertices 99999999", "more than the mesh");
+    expectCleanFailure(patch + " -r 1 --vertices 3", "go with --exact");
+    expectCleanFailure(patch + " -r 1 --invariants S,L --gigamesh", "--gigamesh writes V and P");
     {
         SCOPED_TRACE("unwritable output");
         const RunResult r = runMsii("compute " + patch + " -r 1 --output /nonexistent-folder/x.ply");
         EXPECT_NE(r.code, 0);
         EXPECT_EQ(r.err.rfind("msii: error: ", 0), 0u) << r.err;
         EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    }
+}
+
+// Selection, exact mode and GigaMesh files from the command line: the exact values at the
+// chosen vertices agree with the fast ones, the rest are NaN, and the GigaMesh files hold
+// V as 2x - 1 and P, radii largest first.
+TEST(MsiiCli, ExactModeSelectionAndGigaMeshFiles)
+{
+    const fs::path dir = tempDir() / "exact";
+    fs::create_directories(dir);
+    const fs::path fast = dir / "fast.msii.ply", exact = dir / "exact.msii.ply";
+    const std::string common = "compute '" + smallPatch() + "' --radius 0.8 --scales 4 --quiet --overwrite ";
+    const RunResult rf = runMsii(common + "--invariants V,P --gigamesh --output '" + fast.string() + "'");
+    ASSERT_EQ(rf.code, 0) << rf.err;
+    const RunResult re = runMsii(common + "--invariants P,V --exact --random-vertices 40 --seed 3 --output '" + exact.string() + "'");
+    ASSERT_EQ(re.code, 0) << re.err;
+    ReadMeshOptions ro;
+    ro.keepVertexProperties = true;
+    const ReadMeshResult f = readMesh(fast.string(), ro), e = readMesh(exact.string(), ro);
+    std::vector<std::string> names;
+    for (const auto& p : e.vertexProperties) names.push_back(p.name);
+    ASSERT_EQ(names, (std::vector<std::string>{"V_01", "V_02", "V_03", "V_04", "P_01", "P_02", "P_03", "P_04", "quality"}));
+    std::size_t computed = 0, compared = 0;
+    for (std::size_t i = 0; i < e.mesh.numVertices(); ++i) {
+        if (std::isnan(e.vertexProperties[0].values[i])) continue;
+        ++computed;
+        for (std::size_t k = 0; k < 8; ++k) {
+            const float x = e.vertexProperties[k].values[i], y = f.vertexProperties[k].values[i];
+            if (std::isnan(x) || std::isnan(y)) continue;
+            EXPECT_NEAR(x, y, k < 4 ? 5e-3 : 5e-2) << names[k] << " vertex " << i;
+            ++compared;
+        }
+    }
+    EXPECT_LE(computed, 40u);
+    EXPECT_GT(compared, 20u);
+    // GigaMesh files next to the output: the .mat rows are the PLY's columns, reversed, V as 2x - 1.
+    const fs::path volume = dir / "patch_r0.80_n2_v6.volume.mat", surface = dir / "patch_r0.80_n2_v6.surface.mat";
+    ASSERT_TRUE(fs::exists(volume));
+    ASSERT_TRUE(fs::exists(surface));
+    ASSERT_TRUE(fs::exists(dir / "patch.gigamesh.ply"));
+    const std::string text = readFile(volume.string());
+    std::size_t line = text.find("\n0 ");
+    ASSERT_NE(line, std::string::npos);
+    std::istringstream row(text.substr(line + 1));
+    std::string token;
+    row >> token;
+    ASSERT_EQ(token, "0");
+    double values[4];
+    for (double& v : values) {
+        row >> token;
+        v = std::strtod(token.c_str(), nullptr);  // reads "nan" too
+    }
+    for (int k = 0; k < 4; ++k) {
+        const float v = f.vertexProperties[std::size_t(3 - k)].values[0];
+        if (std::isnan(v)) EXPECT_TRUE(std::isnan(values[k]));
+        else EXPECT_NEAR(values[k], 2.0 * v - 1.0, 1e-6);
     }
 }

@@ -45,6 +45,7 @@ int main(int argc, char** argv)
     CLI::App app{"msii-benchmark: stage timings of msii compute on a generated tablet surface"};
     double spacing = 0.03, size = 31.6, radius = 1.0, precision = 6.0, voxel = 0;
     int scales = 16, runs = 3;
+    std::string invariants = "V,S,P,L";
     app.add_option("--spacing", spacing, "vertex spacing, mm (default 0.03)");
     app.add_option("--size", size, "width = height of the tablet, mm (default 31.6 → 1.1M vertices)");
     app.add_option("--radius", radius, "largest radius R, mm (default 1)");
@@ -52,6 +53,7 @@ int main(int argc, char** argv)
     app.add_option("--precision", precision, "voxels per radius (default 6)");
     app.add_option("--voxel-size", voxel, "finest voxel (default automatic)");
     app.add_option("--runs", runs, "runs; medians are reported (default 3)");
+    app.add_option("--invariants", invariants, "which invariants, e.g. V,S (default V,S,P,L)");
     CLI11_PARSE(app, argc, argv);
 
     samples::HeightFieldOptions ho;
@@ -69,7 +71,8 @@ int main(int argc, char** argv)
     }
     const double gen = generating.seconds();
 
-    std::vector<double> read, check, ls, occ, st, interp, compute, write, total;
+    std::vector<double> read, check, ls, occ, st, interp, samp, pl, compute, write, total;
+    const auto has = [&](char c) { return invariants.find(c) != std::string::npos; };
     ComputeResult last;
     std::size_t nv = 0;
     for (int run = 0; run < runs; ++run) {
@@ -82,9 +85,18 @@ int main(int argc, char** argv)
         o.scales = scales;
         o.minVoxelsPerRadius = precision;
         o.voxelSize = voxel;
+        o.computeVolume = has('V');
+        o.computeSphere = has('S');
+        o.computePatch = has('P');
+        o.computeLine = has('L');
         last = computeInvariants(mesh, o);
         const Stopwatch writing;
-        writePly(output, mesh, featureProperties(last.invariants));
+        Features features;
+        features.volume = &last.invariants.volume;
+        features.sphere = &last.invariants.sphere;
+        features.patch = &last.patchLine.patch;
+        features.line = &last.patchLine.line;
+        writePly(output, mesh, featureProperties(features));
         write.push_back(writing.seconds());
         total.push_back(wall.seconds());
         check.push_back(last.timings.check);
@@ -92,14 +104,16 @@ int main(int argc, char** argv)
         occ.push_back(last.timings.occupancy);
         st.push_back(last.timings.stencils);
         interp.push_back(last.timings.interpolation);
+        samp.push_back(last.timings.samples);
+        pl.push_back(last.timings.patchLine);
         compute.push_back(last.timings.total);
     }
     fs::remove_all(dir);
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
     std::printf("msii-benchmark: tablet %.1f x %.1f mm, spacing %.3f mm, %zu vertices, R = %g, N = %d, "
-                "V and S, precision %g, voxel %.4f mm, %d levels, %d runs (medians)\n",
-                size, size, spacing, nv, radius, scales, precision, last.voxelSize,
+                "%s, precision %g, voxel %.4f mm, %d levels, %d runs (medians)\n",
+                size, size, spacing, nv, radius, scales, invariants.c_str(), precision, last.voxelSize,
                 last.invariants.numLevels, runs);
     std::printf("machine: %s, %u hardware threads\n\n", cpuModel().c_str(), std::thread::hardware_concurrency());
     std::printf("| %-38s | %8s |\n|%s|%s|\n", "stage", "seconds", std::string(40, '-').c_str(), std::string(10, '-').c_str());
@@ -115,6 +129,8 @@ int main(int argc, char** argv)
     row("occupancy pyramid", median(occ), "%8.2f");
     row("stencils (V and S)", median(st), "%8.2f");
     row("interpolation to vertices", median(interp), "%8.2f");
+    row("P, L: surface samples", median(samp), "%8.2f");
+    row("P, L: kernel sums", median(pl), "%8.2f");
     row("compute (the stages above but reading)", median(compute), "%8.2f");
     row("write result PLY", median(write), "%8.2f");
     row("**total wall, read to write**", median(total), "%8.2f");

@@ -1,4 +1,5 @@
-/// `msii compute INPUT... --radius R [--scales N] [--output OUT.ply]`: V and S per vertex.
+/// `msii compute INPUT... --radius R [--scales N] [--output OUT.ply]`: V, S, P and L per
+/// vertex (or the chosen ones), fast or exact; optionally GigaMesh-compatible files too.
 #include "commands.h"
 
 #include <msii/core/errors.h>
@@ -8,6 +9,7 @@
 #include <msii/invariants/compute.h>
 #include <msii/io/atomic_file.h>
 #include <msii/io/feature_properties.h>
+#include <msii/io/gigamesh_files.h>
 #include <msii/io/write_ply.h>
 #include <msii/mesh/mesh_stats.h>
 #include <msii/mesh/read_mesh.h>
@@ -15,11 +17,13 @@
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <iomanip>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <random>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -37,7 +41,104 @@ struct ComputeArgs {
     double precision = 6.0;
     int threads = 0;
     bool quiet = false, overwrite = false, repair = false, noSphere = false;
+    std::string invariants = "V,S,P,L";
+    bool exact = false;
+    std::string vertices;       // exact mode: comma-separated indices
+    std::size_t randomVertices = 0;
+    std::uint64_t seed = 1;
+    bool gigamesh = false;
 };
+
+struct Selection {
+    bool volume = false, sphere = false, patch = false, line = false;
+};
+
+/// "V,S,P,L" (any order, case, subset) to a selection; --no-sphere removes S.
+Selection parseInvariants(const ComputeArgs& args)
+{
+    Selection sel;
+    std::stringstream in(args.invariants);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+        item.erase(0, item.find_first_not_of(" \t"));
+        item.erase(item.find_last_not_of(" \t") + 1);
+        if (item.empty()) continue;
+        if (item == "V" || item == "v") sel.volume = true;
+        else if (item == "S" || item == "s") sel.sphere = true;
+        else if (item == "P" || item == "p") sel.patch = true;
+        else if (item == "L" || item == "l") sel.line = true;
+        else
+            throw InvalidInputError("unknown invariant '" + item +
+                                    "' in --invariants (use any of V, S, P, L, comma-separated)");
+    }
+    if (args.noSphere) sel.sphere = false;
+    if (!sel.volume && !sel.sphere && !sel.patch && !sel.line)
+        throw InvalidInputError("--invariants selects nothing (use any of V, S, P, L)");
+    return sel;
+}
+
+/// The vertices of the exact mode: --vertices "3,17,42", or --random-vertices K (distinct,
+/// seeded, ascending), or all.
+std::vector<std::uint32_t> exactVertices(const ComputeArgs& args, std::size_t numVertices)
+{
+    std::vector<std::uint32_t> out;
+    if (!args.vertices.empty()) {
+        std::stringstream in(args.vertices);
+        std::string item;
+        while (std::getline(in, item, ',')) {
+            std::size_t used = 0;
+            long long v = -1;
+            try {
+                v = std::stoll(item, &used);
+            } catch (const std::exception&) {
+                used = 0;
+            }
+            if (used == 0 || item.find_first_not_of(" \t", used) != std::string::npos || v < 0)
+                throw InvalidInputError("--vertices: '" + item +
+                                        "' is not a vertex index (use e.g. --vertices 0,17,42)");
+            if (std::size_t(v) >= numVertices)
+                throw InvalidInputError("--vertices: vertex " + std::to_string(v) +
+                                        " does not exist (the mesh has " +
+                                        std::to_string(numVertices) + " vertices, 0 to " +
+                                        std::to_string(numVertices - 1) + ")");
+            out.push_back(std::uint32_t(v));
+        }
+        return out;
+    }
+    if (args.randomVertices > 0) {
+        if (args.randomVertices > numVertices)
+            throw InvalidInputError("--random-vertices " + std::to_string(args.randomVertices) +
+                                    " is more than the mesh's " + std::to_string(numVertices) +
+                                    " vertices");
+        std::mt19937_64 rng(args.seed);
+        std::vector<char> taken(numVertices, 0);
+        while (out.size() < args.randomVertices) {
+            const std::uint32_t v = std::uint32_t(rng() % numVertices);
+            if (!taken[v]) taken[v] = 1, out.push_back(v);
+        }
+        std::sort(out.begin(), out.end());
+    }
+    return out;  // empty: all
+}
+
+/// GigaMesh-compatible outputs next to @p output: <stem>_r.._n.._v...volume.mat (V),
+/// .surface.mat (P) and <stem>.gigamesh.ply (V, else P).
+std::vector<std::string> gigameshPaths(const ComputeArgs& args, const std::string& input,
+                                       const std::string& output, const Selection& sel)
+{
+    const fs::path dir = fs::path(output).parent_path();
+    const std::string stem = fs::path(input).stem().string();
+    const int precision = int(std::lround(args.precision));
+    std::vector<std::string> paths;
+    if (sel.volume)
+        paths.push_back((dir / gigaMeshMatFileName(stem, args.radius, args.scales, precision,
+                                                    GigaMeshInvariant::Volume)).string());
+    if (sel.patch)
+        paths.push_back((dir / gigaMeshMatFileName(stem, args.radius, args.scales, precision,
+                                                    GigaMeshInvariant::Patch)).string());
+    paths.push_back((dir / (stem + ".gigamesh.ply")).string());
+    return paths;
+}
 
 /// Where the result of @p input goes: --output for a single input, else
 /// <output-dir or input's folder>/<stem>.msii.ply
@@ -78,10 +179,17 @@ void computeOne(const ComputeArgs& args, const std::string& input, const std::st
 {
     const Stopwatch total;
     const std::string sidecar = sidecarPathFor(output);
-    if (!args.overwrite && (fs::exists(output) || fs::exists(sidecar)))
-        throw IOError("'" + output + "' exists already (use --overwrite to replace it)");
-    checkWritable(output);
-    checkWritable(sidecar);
+    const Selection sel = parseInvariants(args);
+    if (args.gigamesh && !sel.volume && !sel.patch)
+        throw InvalidInputError("--gigamesh writes V and P; select at least one of them");
+    std::vector<std::string> outputs{output, sidecar};
+    if (args.gigamesh)
+        for (const auto& path : gigameshPaths(args, input, output, sel)) outputs.push_back(path);
+    for (const auto& path : outputs) {
+        if (!args.overwrite && fs::exists(path))
+            throw IOError("'" + path + "' exists already (use --overwrite to replace it)");
+        checkWritable(path);
+    }
 
     Progress progress(!args.quiet && Progress::stderrIsTerminal());
     ReadMeshResult read = readMesh(input);
@@ -93,8 +201,22 @@ void computeOne(const ComputeArgs& args, const std::string& input, const std::st
     options.scales = args.scales;
     options.voxelSize = args.voxelSize;
     options.minVoxelsPerRadius = args.precision;
-    options.computeSphere = !args.noSphere;
+    options.computeVolume = sel.volume;
+    options.computeSphere = sel.sphere;
+    options.computePatch = sel.patch;
+    options.computeLine = sel.line;
+    options.exact = args.exact;
     options.repair = args.repair;
+    if (args.exact) {
+        options.exactVertices = exactVertices(args, read.mesh.numVertices());
+        if (options.exactVertices.empty() && read.mesh.numVertices() > 20000 && !args.quiet)
+            std::fprintf(stderr,
+                         "msii: warning: %s: exact mode on all %zu vertices is slow; "
+                         "--vertices or --random-vertices restrict it\n",
+                         input.c_str(), read.mesh.numVertices());
+    } else if (!args.vertices.empty() || args.randomVertices > 0) {
+        throw InvalidInputError("--vertices and --random-vertices go with --exact");
+    }
     ComputeResult result;
     try {
         result = computeInvariants(read.mesh, options, &progress);
@@ -105,19 +227,58 @@ void computeOne(const ComputeArgs& args, const std::string& input, const std::st
         for (const auto& w : result.warnings)
             std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), w.c_str());
 
-    const std::vector<VertexProperty> props = featureProperties(result.invariants);
     const auto& inv = result.invariants;
+    const auto& pl = result.patchLine;
+    Features features;
+    features.volume = &inv.volume;
+    features.sphere = &inv.sphere;
+    features.patch = &pl.patch;
+    features.line = &pl.line;
+    const std::vector<VertexProperty> props = featureProperties(features);
     const std::size_t n = inv.radii.size();
+    std::string letters;
+    for (const auto& [on, c] : {std::pair{sel.volume, 'V'}, std::pair{sel.sphere, 'S'},
+                                std::pair{sel.patch, 'P'}, std::pair{sel.line, 'L'}})
+        if (on) letters += c;
 
     const Stopwatch write;
     WritePlyOptions plyOptions;
     std::ostringstream comment;
-    comment << "msii " << versionString() << " compute R=" << args.radius << " N=" << n
-            << " voxel=" << result.voxelSize
-            << "; V_jj = V/|B_r|, S_jj = S/(4 pi r^2) (plane = 0.5), r_j = j*R/N; NaN = ball "
-               "reaches the border; quality = V_NN";
+    comment << "msii " << versionString() << " compute" << (args.exact ? " --exact" : "")
+            << " R=" << args.radius << " N=" << n << " voxel=" << result.voxelSize
+            << "; V_jj = V/|B_r|, S_jj = S/(4 pi r^2) (plane 0.5), P_jj = P/(pi r^2), L_jj = "
+               "L/(2 pi r) (plane 1), r_j = j*R/N; NaN = ball reaches the border"
+            << (args.exact ? " or vertex not computed" : "") << "; quality = "
+            << qualitySource(features);
     plyOptions.comments.push_back(comment.str());
     writePly(output, read.mesh, props, plyOptions);
+    if (args.gigamesh) {
+        const auto paths = gigameshPaths(args, input, output, sel);
+        GigaMeshMatInfo info;
+        info.inputFile = fs::absolute(input).string();
+        info.largestRadius = args.radius;
+        info.radii = inv.radii;
+        info.notes = {"msii voxel size " + std::to_string(result.voxelSize) + ", precision " +
+                      std::to_string(args.precision) + (args.exact ? ", exact mode" : "")};
+        std::size_t k = 0;
+        GigaMeshRows plyRows;
+        if (sel.volume) {
+            info.invariant = GigaMeshInvariant::Volume;
+            plyRows = toGigaMeshRows(inv.volume, GigaMeshInvariant::Volume);
+            writeGigaMeshMat(paths[k++], gigaMeshMatHeader(info), plyRows);
+        }
+        if (sel.patch) {
+            info.invariant = GigaMeshInvariant::Patch;
+            const GigaMeshRows rows = toGigaMeshRows(pl.patch, GigaMeshInvariant::Patch);
+            writeGigaMeshMat(paths[k++], gigaMeshMatHeader(info), rows);
+            if (!sel.volume) plyRows = rows;
+        }
+        GigaMeshPlyOptions gmOptions;
+        gmOptions.comments.push_back(std::string("msii ") + versionString() + ": feature_vector = " +
+                                     (sel.volume ? "2 V/|B_r| - 1" : "P/(pi r^2)") +
+                                     ", largest radius first; quality = largest element");
+        writeGigaMeshPly(paths[k], read.mesh, plyRows, gmOptions);
+    }
     const double writeSeconds = write.seconds();
 
     nlohmann::json j;
@@ -135,14 +296,23 @@ void computeOne(const ComputeArgs& args, const std::string& input, const std::st
                        {"levels", inv.numLevels},
                        {"level_of_radius", inv.levelOfRadius},
                        {"band_half_width_voxels", result.bandHalfWidth},
-                       {"invariants", options.computeSphere ? nlohmann::json{"V", "S"} : nlohmann::json{"V"}},
+                       {"invariants", [&] {
+                            nlohmann::json list = nlohmann::json::array();
+                            for (char c : letters) list.push_back(std::string(1, c));
+                            return list;
+                        }()},
+                       {"mode", args.exact ? "exact" : "fast"},
+                       {"exact_vertices", options.exactVertices.size()},
                        {"repair", args.repair},
                        {"threads", args.threads}};
     j["conventions"] = {{"V", "V/|B_r| in [0,1], flat plane 0.5, convex < 0.5"},
                         {"S", "S/(4 pi r^2) in [0,1], flat plane 0.5, convex < 0.5"},
+                        {"P", "P/(pi r^2), flat plane 1"},
+                        {"L", "L/(2 pi r), flat plane 1"},
                         {"order", "radius ascending: V_01 = r_1 = R/N ... V_NN = R"},
-                        {"quality", "V_NN (volume fraction at the largest radius)"},
-                        {"masked", "NaN where the ball of that radius reaches a mesh border"}};
+                        {"quality", qualitySource(features) + " (the first of V, S, P, L computed, at the largest radius)"},
+                        {"masked", args.exact ? "NaN where the ball reaches a mesh border, and at vertices not computed"
+                                              : "NaN where the ball of that radius reaches a mesh border"}};
     const auto& st = result.stats;
     j["mesh"] = {{"vertices", st.numVertices},
                  {"faces", st.numTriangles},
@@ -161,7 +331,8 @@ void computeOne(const ComputeArgs& args, const std::string& input, const std::st
     j["timings_seconds"] = {{"read", readSeconds},     {"check", t.check},
                             {"level_set", t.levelSet}, {"occupancy", t.occupancy},
                             {"stencils", t.stencils},  {"interpolation", t.interpolation},
-                            {"write", writeSeconds},
+                            {"samples", t.samples},    {"patch_line", t.patchLine},
+                            {"exact", t.exact},        {"write", writeSeconds},
                             {"total", total.seconds()}};
     j["warnings"] = result.warnings;
     writeTextFileAtomic(sidecar, j.dump(2) + "\n");
@@ -178,9 +349,9 @@ std::function<int()> addComputeCommand(CLI::App& app)
 {
     auto args = std::make_shared<ComputeArgs>();
     CLI::App* cmd = app.add_subcommand(
-        "compute", "Compute the volume (V) and sphere-area (S) integral invariants at N radii "
-                   "for every vertex; writes a PLY with V_01..V_NN, S_01..S_NN and quality, and a "
-                   "JSON record next to it.");
+        "compute", "Compute the integral invariants V (volume), S (sphere area), P (patch "
+                   "area) and L (line length) at N radii for every vertex; writes a PLY with "
+                   "V_01..V_NN, S_.., P_.., L_.. and quality, and a JSON record next to it.");
     cmd->add_option("inputs", args->inputs, "Mesh files (PLY, OBJ, OFF, STL)")->required();
     cmd->add_option("-r,--radius", args->radius,
                     "Largest radius R in mesh units (usually mm): about the size of the largest "
@@ -199,7 +370,21 @@ std::function<int()> addComputeCommand(CLI::App& app)
     cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs");
     cmd->add_flag("--repair", args->repair,
                   "Drop degenerate and duplicate faces instead of stopping");
-    cmd->add_flag("--no-sphere", args->noSphere, "Compute V only");
+    cmd->add_option("--invariants", args->invariants,
+                    "Which invariants, comma-separated (default V,S,P,L)");
+    cmd->add_flag("--no-sphere", args->noSphere, "Leave out S (same as omitting it from --invariants)");
+    cmd->add_flag("--exact", args->exact,
+                  "Exact reference mode: from the triangles themselves, no voxels or samples "
+                  "(slow; restrict it with --vertices or --random-vertices)");
+    cmd->add_option("--vertices", args->vertices,
+                    "With --exact: vertex indices, comma-separated (0-based); others are NaN");
+    cmd->add_option("--random-vertices", args->randomVertices,
+                    "With --exact: this many distinct random vertices (see --seed)");
+    cmd->add_option("--seed", args->seed, "Seed for --random-vertices (default 1)");
+    cmd->add_flag("--gigamesh", args->gigamesh,
+                  "Also write GigaMesh-compatible files next to the output: "
+                  "<name>_r<R>_n<log2 N>_v<precision>.volume.mat (2V/|B|-1) and .surface.mat "
+                  "(P), radii largest first, and <name>.gigamesh.ply with a feature_vector list");
 
     return [args]() {
         if (!(args->radius > 0)) {

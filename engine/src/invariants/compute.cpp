@@ -2,11 +2,14 @@
 
 #include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
+#include <msii/invariants/exact.h>
 #include <msii/invariants/scales.h>
 #include <msii/levelset/levelset.h>
 #include <msii/mesh/border_distance.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace msii {
@@ -90,27 +93,87 @@ ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Pr
         result.warnings.push_back(msg.str());
     }
 
-    stage.restart();
-    LevelSetOptions lsOptions;
-    lsOptions.voxelSize = result.voxelSize;
-    lsOptions.halfWidth = 2;  // occupancy reads φ within 1 voxel and its neighbours'
-    const LevelSet levelSet = buildLevelSet(mesh, lsOptions, progress);
-    result.bandHalfWidth = lsOptions.halfWidth;
-    result.levelSetVoxels = levelSet.info().activeVoxels;
-    result.levelSetBytes = levelSet.info().memoryBytes;
-    result.timings.levelSet = stage.seconds();
-
-    VolumeSphereOptions vsOptions;
-    vsOptions.radii = radii;
-    vsOptions.minVoxelsPerRadius = options.minVoxelsPerRadius;
-    vsOptions.computeSphere = options.computeSphere;
+    if (!options.computeVolume && !options.computeSphere && !options.computePatch &&
+        !options.computeLine)
+        throw InvalidInputError("no invariant selected (choose any of V, S, P, L)");
+    std::vector<double> border;
     if (!result.check.closed)
-        vsOptions.borderDistance =
-            borderDistance(mesh, result.check.borderEdges, 2.0 * options.radius);
-    result.invariants = computeVolumeSphere(mesh, levelSet, vsOptions, progress);
-    result.timings.occupancy = result.invariants.occupancySeconds;
-    result.timings.stencils = result.invariants.stencilSeconds;
-    result.timings.interpolation = result.invariants.interpolationSeconds;
+        border = borderDistance(mesh, result.check.borderEdges, 2.0 * options.radius);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+
+    if (options.exact) {
+        // Exact reference mode: the chosen vertices from the triangles, the rest NaN.
+        stage.restart();
+        ExactOptions eo;
+        eo.radii = radii;
+        eo.vertices = options.exactVertices;
+        eo.borderDistance = border;
+        eo.computeVolumeSphere = options.computeVolume || options.computeSphere;
+        eo.computePatchLine = options.computePatch || options.computeLine;
+        const ExactResult exact = computeExact(mesh, eo, progress);
+        const std::size_t nv = mesh.numVertices();
+        const auto scatter = [&](const std::vector<std::vector<double>>& from, bool wanted) {
+            std::vector<std::vector<float>> to;
+            if (!wanted) return to;
+            to.assign(radii.size(), std::vector<float>(nv, nan));
+            for (std::size_t j = 0; j < radii.size(); ++j)
+                for (std::size_t k = 0; k < exact.vertices.size(); ++k)
+                    to[j][exact.vertices[k]] = float(from[j][k]);
+            return to;
+        };
+        result.invariants.radii = radii;
+        result.invariants.volume = scatter(exact.volume, options.computeVolume);
+        result.invariants.sphere = scatter(exact.sphere, options.computeSphere);
+        result.patchLine.radii = radii;
+        result.patchLine.patch = scatter(exact.patch, options.computePatch);
+        result.patchLine.line = scatter(exact.line, options.computeLine);
+        result.timings.exact = stage.seconds();
+        result.timings.total = total.seconds();
+        return result;
+    }
+
+    if (options.computeVolume || options.computeSphere) {
+        stage.restart();
+        LevelSetOptions lsOptions;
+        lsOptions.voxelSize = result.voxelSize;
+        lsOptions.halfWidth = 2;  // occupancy reads φ within 1 voxel and its neighbours'
+        const LevelSet levelSet = buildLevelSet(mesh, lsOptions, progress);
+        result.bandHalfWidth = lsOptions.halfWidth;
+        result.levelSetVoxels = levelSet.info().activeVoxels;
+        result.levelSetBytes = levelSet.info().memoryBytes;
+        result.timings.levelSet = stage.seconds();
+
+        VolumeSphereOptions vsOptions;
+        vsOptions.radii = radii;
+        vsOptions.minVoxelsPerRadius = options.minVoxelsPerRadius;
+        vsOptions.computeSphere = options.computeSphere;
+        vsOptions.borderDistance = border;
+        result.invariants = computeVolumeSphere(mesh, levelSet, vsOptions, progress);
+        if (!options.computeVolume) result.invariants.volume.clear();
+        result.timings.occupancy = result.invariants.occupancySeconds;
+        result.timings.stencils = result.invariants.stencilSeconds;
+        result.timings.interpolation = result.invariants.interpolationSeconds;
+    } else {
+        result.invariants.radii = radii;
+        result.invariants.levelOfRadius =
+            gridLevelOfRadius(radii, result.voxelSize, options.minVoxelsPerRadius);
+        result.invariants.numLevels =
+            *std::max_element(result.invariants.levelOfRadius.begin(),
+                              result.invariants.levelOfRadius.end()) + 1;
+    }
+
+    if (options.computePatch || options.computeLine) {
+        PatchLineOptions plOptions;
+        plOptions.radii = radii;
+        plOptions.cellSize = result.voxelSize;
+        plOptions.minCellsPerRadius = options.minVoxelsPerRadius;
+        plOptions.computePatch = options.computePatch;
+        plOptions.computeLine = options.computeLine;
+        plOptions.borderDistance = border;
+        result.patchLine = computePatchLine(mesh, plOptions, progress);
+        result.timings.samples = result.patchLine.samplingSeconds;
+        result.timings.patchLine = result.patchLine.gatherSeconds;
+    }
     result.timings.total = total.seconds();
     return result;
 }

@@ -2,6 +2,9 @@
 
 #include <msii/core/errors.h>
 
+#include <algorithm>
+#include <cmath>
+
 namespace msii {
 
 std::vector<double> equidistantRadii(double largestRadius, int scales)
@@ -11,6 +14,17 @@ std::vector<double> equidistantRadii(double largestRadius, int scales)
     std::vector<double> radii(scales);
     for (int j = 1; j <= scales; ++j) radii[j - 1] = largestRadius * j / scales;  // Eq. 5
     return radii;
+}
+
+std::vector<int> gridLevelOfRadius(const std::vector<double>& radii, double h0,
+                                   double minCellsPerRadius)
+{
+    std::vector<int> levels;
+    levels.reserve(radii.size());
+    for (double r : radii)
+        levels.push_back(
+            std::max(0, int(std::floor(std::log2(r / (minCellsPerRadius * h0)) + 1e-9))));
+    return levels;
 }
 
 } // namespace msii

@@ -1,4 +1,5 @@
 #include <msii/invariants/volume_sphere.h>
+#include <msii/invariants/scales.h>
 
 #include "../levelset/levelset_impl.h"
 #include "../levelset/tile_sides.h"
@@ -43,13 +44,8 @@ struct LevelPlan {
 LevelPlan planLevels(const std::vector<double>& radii, double h, double k)
 {
     LevelPlan plan;
-    int maxLevel = 0;
-    for (double r : radii) {
-        const int level = std::max(0, int(std::floor(std::log2(r / (k * h)) + 1e-9)));
-        plan.levelOf.push_back(level);
-        maxLevel = std::max(maxLevel, level);
-    }
-    plan.radiiOf.resize(maxLevel + 1);
+    plan.levelOf = gridLevelOfRadius(radii, h, k);
+    plan.radiiOf.resize(*std::max_element(plan.levelOf.begin(), plan.levelOf.end()) + 1);
     for (std::size_t j = 0; j < radii.size(); ++j) plan.radiiOf[plan.levelOf[j]].push_back(int(j));
     return plan;
 }

@@ -1,27 +1,42 @@
 #include <msii/io/feature_properties.h>
 
-#include <string>
+#include <array>
+#include <utility>
 
 namespace msii {
 
 namespace {
-/// "V_07": two digits at least (N > 99 gives three).
-std::string numbered(const char* prefix, std::size_t j)
+std::array<std::pair<char, const FeatureColumns*>, 4> ordered(const Features& f)
 {
-    const std::string digits = std::to_string(j);
-    return std::string(prefix) + (digits.size() < 2 ? "_0" : "_") + digits;
+    return {{{'V', f.volume}, {'S', f.sphere}, {'P', f.patch}, {'L', f.line}}};
 }
 } // namespace
 
-std::vector<VertexProperty> featureProperties(const VolumeSphereResult& invariants)
+std::string featureName(char letter, std::size_t j)
+{
+    const std::string digits = std::to_string(j + 1);
+    return std::string(1, letter) + (digits.size() < 2 ? "_0" : "_") + digits;
+}
+
+std::vector<VertexProperty> featureProperties(const Features& features)
 {
     std::vector<VertexProperty> props;
-    const std::size_t n = invariants.volume.size();
-    for (std::size_t j = 0; j < n; ++j) props.push_back({numbered("V", j + 1), invariants.volume[j]});
-    for (std::size_t j = 0; j < invariants.sphere.size(); ++j)
-        props.push_back({numbered("S", j + 1), invariants.sphere[j]});
-    if (n > 0) props.push_back({"quality", invariants.volume.back()});
+    const FeatureColumns* quality = nullptr;
+    for (const auto& [letter, columns] : ordered(features)) {
+        if (!columns || columns->empty()) continue;
+        for (std::size_t j = 0; j < columns->size(); ++j)
+            props.push_back({featureName(letter, j), (*columns)[j]});
+        if (!quality) quality = columns;
+    }
+    if (quality) props.push_back({"quality", quality->back()});
     return props;
+}
+
+std::string qualitySource(const Features& features)
+{
+    for (const auto& [letter, columns] : ordered(features))
+        if (columns && !columns->empty()) return featureName(letter, columns->size() - 1);
+    return "";
 }
 
 } // namespace msii

@@ -515,10 +515,18 @@ private:
     ReadMeshResult& mResult;
 };
 
-/// What each vertex property feeds: a coordinate (0, 1, 2), a kept property (3 + index), or
-/// nothing (-1).
+/// A vertex list property kept with ReadMeshOptions::keepVertexLists: every vertex's list,
+/// one after the other (all of the same length, checked while reading).
+struct KeptList {
+    std::string name;
+    std::size_t length = 0;     ///< the first vertex's list length
+    std::vector<float> values;  ///< numVertices * length
+};
+
+/// What each vertex property feeds: a coordinate (0, 1, 2), a kept property (3 + index), a
+/// kept list (-2 - index), or nothing (-1).
 std::vector<int> vertexTargets(const PlyElement& element, const ReadMeshOptions& options,
-                               std::vector<VertexProperty>& kept)
+                               std::vector<VertexProperty>& kept, std::vector<KeptList>& lists)
 {
     std::vector<int> targets;
     for (const PlyProperty& property : element.properties) {
@@ -531,15 +539,34 @@ std::vector<int> vertexTargets(const PlyElement& element, const ReadMeshOptions&
                 target = 3 + int(kept.size());
                 kept.push_back({property.name, std::vector<float>(element.count)});
             }
+        } else if (options.keepVertexLists) {
+            target = -2 - int(lists.size());
+            lists.push_back({property.name, 0, {}});
         }
         targets.push_back(target);
     }
     return targets;
 }
 
+/// Appends each kept list as properties <name>_00, <name>_01, ... (element index, zero-based).
+void expandLists(std::vector<KeptList>& lists, std::size_t numVertices, std::vector<VertexProperty>& kept)
+{
+    for (KeptList& list : lists) {
+        for (std::size_t k = 0; k < list.length; ++k) {
+            const std::string digits = std::to_string(k);
+            VertexProperty property{list.name + (digits.size() < 2 ? "_0" : "_") + digits,
+                                    std::vector<float>(numVertices)};
+            for (std::size_t v = 0; v < numVertices; ++v) property.values[v] = list.values[v * list.length + k];
+            kept.push_back(std::move(property));
+        }
+        list.values = {};
+    }
+}
+
 template <class Source>
 void readVerticesGeneric(Source& source, ReadContext& context, const PlyElement& element,
-                         const std::vector<int>& targets, TriMesh& mesh, std::vector<VertexProperty>& kept)
+                         const std::vector<int>& targets, TriMesh& mesh, std::vector<VertexProperty>& kept,
+                         std::vector<KeptList>& lists)
 {
     for (std::uint64_t v = 0; v < element.count; ++v) {
         context.record = v;
@@ -549,7 +576,18 @@ void readVerticesGeneric(Source& source, ReadContext& context, const PlyElement&
             const int target = targets[i];
             if (property.isList) {
                 const std::size_t n = source.readCount(property.countType, property.type);
-                for (std::size_t j = 0; j < n; ++j) source.skip(property.type);
+                if (target > -2) {
+                    for (std::size_t j = 0; j < n; ++j) source.skip(property.type);
+                    continue;
+                }
+                KeptList& list = lists[std::size_t(-2 - target)];
+                if (v == 0) list.length = n;
+                if (n != list.length)
+                    throw InvalidInputError("'" + *context.path + "' has vertex lists '" + list.name +
+                                            "' of different lengths (" + std::to_string(list.length) +
+                                            " values at vertex 1, " + std::to_string(n) + " at vertex " +
+                                            std::to_string(v + 1) + "); msii keeps only lists of one length.");
+                for (std::size_t j = 0; j < n; ++j) list.values.push_back(source.readFloat(property.type));
             } else if (target >= 3) {
                 kept[std::size_t(target - 3)].values[v] = source.readFloat(property.type);
             } else if (target >= 0) {
@@ -742,14 +780,16 @@ void readBody(Source& source, const std::string& path, const PlyHeader& header,
         }
         if (&element == &vertexElement) {
             mesh.points.assign(element.count, Vec3{});
-            const std::vector<int> targets = vertexTargets(element, options, result.vertexProperties);
+            std::vector<KeptList> lists;
+            const std::vector<int> targets = vertexTargets(element, options, result.vertexProperties, lists);
             if constexpr (isBinary) {
                 if (!element.hasLists()) {
                     readVerticesFixed(source, context, element, targets, mesh, result.vertexProperties);
                     continue;
                 }
             }
-            readVerticesGeneric(source, context, element, targets, mesh, result.vertexProperties);
+            readVerticesGeneric(source, context, element, targets, mesh, result.vertexProperties, lists);
+            expandLists(lists, std::size_t(element.count), result.vertexProperties);
         } else if (element.name == "face" || element.name == "tristrips") {
             const bool strips = element.name == "tristrips";
             const int indexProperty = findIndexProperty(path, element);

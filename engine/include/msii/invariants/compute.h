@@ -5,11 +5,13 @@
 /// the caller (tools/msii), so tests and other programs run exactly what users run.
 
 #include <msii/core/progress.h>
+#include <msii/invariants/patch_line.h>
 #include <msii/invariants/volume_sphere.h>
 #include <msii/mesh/mesh_check.h>
 #include <msii/mesh/mesh_stats.h>
 #include <msii/mesh/trimesh.h>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -22,16 +24,27 @@ struct ComputeOptions {
     double voxelSize = 0;
     /// Precision knob: each radius is evaluated on the coarsest grid where r/h >= this.
     double minVoxelsPerRadius = 6.0;
-    bool computeSphere = true;      ///< S as well as V
+    /// Which invariants (paper Eq. 2). V and S share the level set and one stencil pass;
+    /// P and L share one pass over the surface samples.
+    bool computeVolume = true, computeSphere = true, computePatch = true, computeLine = true;
+    /// Exact reference mode (invariants/exact.h): all four from the triangles themselves, at
+    /// exactVertices only (all vertices if empty); the others are NaN. Slow: for checking.
+    bool exact = false;
+    std::vector<std::uint32_t> exactVertices;
     bool repair = false;            ///< drop degenerate and duplicate faces instead of failing
 };
 
 struct ComputeTimings {
-    double check = 0, levelSet = 0, occupancy = 0, stencils = 0, interpolation = 0, total = 0;
+    double check = 0, levelSet = 0, occupancy = 0, stencils = 0, interpolation = 0;
+    double samples = 0, patchLine = 0;  ///< P and L: sampling the surface, kernel sums
+    double exact = 0;                   ///< exact mode
+    double total = 0;
 };
 
 struct ComputeResult {
+    /// V and S (the columns of the invariants not asked for are empty), and the grid plan.
     VolumeSphereResult invariants;
+    PatchLineResult patchLine;         ///< P and L (columns empty if not asked for)
     MeshStats stats;
     MeshCheckResult check;
     std::size_t removedFaces = 0;      ///< with repair

@@ -9,4 +9,11 @@ namespace msii {
 /// Radii r_j = j·R/N for j = 1..N, ascending. @pre R > 0, N >= 1.
 std::vector<double> equidistantRadii(double largestRadius, int scales);
 
+/// The grid level of each radius for grid-based invariants: radius r goes to the coarsest
+/// level l (cell edge h0·2^l) with r / (h0·2^l) >= minCellsPerRadius, level 0 if none.
+/// Errors of voxel and sample sums follow h/r, so this keeps them flat across scales while
+/// large radii stay cheap.
+std::vector<int> gridLevelOfRadius(const std::vector<double>& radii, double h0,
+                                   double minCellsPerRadius);
+
 } // namespace msii

@@ -14,11 +14,14 @@
 ///    anti-aliased ball weights (cube/ball fraction) for V, and for S = dV/dr the
 ///    difference of two such balls at r ± h/2. Both are normalised by the stencil's own sum,
 ///    so a full ball gives exactly 1 and a plane through a voxel centre exactly 1/2.
-/// 4. Vertices: trilinear interpolation from the 8 surrounding voxel centres after removing
-///    each centre's offset from the surface with the plane model
-///    (V̂ = 1/2 − 3x/4 + x³/4, Ŝ = (1 − x)/2, x = ψ / r), where ψ, the centre's distance
-///    from the surface, is the vertex normal's plane plus a curvature fitted to the centres'
-///    exact distances (capped at 0.5/r).
+/// 4. Vertices: trilinear interpolation from the 8 surrounding voxel centres after moving
+///    each centre onto the surface with a second-order model (a ball centre x·r outside a
+///    surface of curvature κ: V̂(x) = V̂(0) − 3x/4 + 3κr x²/8 + x³/4, and likewise Ŝ), where
+///    x·r, the centre's distance from the surface, is the vertex normal's plane plus a
+///    curvature fitted to the centres' exact distances (capped at 0.5/r).
+/// 5. The voxel sums blur V̂ by a tent of variance h²/6 per axis; the resulting bias,
+///    (h²/12)·ΔV̂ = h²Ŝ'/(4r) for V and h²Ŝ'/(3r) for S, is removed with Ŝ' from the
+///    neighbouring radii.
 /// All radii of one level share one pass over each stencil.
 
 #include <msii/core/progress.h>

@@ -1,17 +1,35 @@
 #pragma once
 /// @file feature_properties.h
 /// @brief The per-vertex features of `msii compute` as named output properties, the same
-/// for every writer: V_01 … V_NN, then S_01 … S_NN (radius ascending, r_j = j·R/N), then
-/// `quality` = V_NN (the volume fraction at the largest radius). NaN marks a masked value.
+/// for every writer: V_01 … V_NN, S_01 … S_NN, P_01 … P_NN, L_01 … L_NN (those computed,
+/// radius ascending, r_j = j·R/N), then `quality` = the value at the largest radius of the
+/// first invariant present in the order V, S, P, L (V_NN whenever V was computed). NaN marks
+/// a masked value.
 
-#include <msii/invariants/volume_sphere.h>
 #include <msii/mesh/trimesh.h>
 
+#include <string>
 #include <vector>
 
 namespace msii {
 
-/// Copies the features of @p invariants into properties (S only if it was computed).
-std::vector<VertexProperty> featureProperties(const VolumeSphereResult& invariants);
+using FeatureColumns = std::vector<std::vector<float>>;  ///< [j][vertex], radius ascending
+
+/// The computed invariants; empty columns mean "not computed".
+struct Features {
+    const FeatureColumns* volume = nullptr;  ///< V/|B_r|
+    const FeatureColumns* sphere = nullptr;  ///< S/(4π r²)
+    const FeatureColumns* patch = nullptr;   ///< P/(π r²)
+    const FeatureColumns* line = nullptr;    ///< L/(2π r)
+};
+
+/// Copies the features into properties, in the order of the file comment.
+std::vector<VertexProperty> featureProperties(const Features& features);
+
+/// The name of feature j (0-based) of invariant @p letter: "V_07" (two digits at least).
+std::string featureName(char letter, std::size_t j);
+
+/// Which property `quality` holds, e.g. "V_16", for the documentation of outputs.
+std::string qualitySource(const Features& features);
 
 } // namespace msii

@@ -20,13 +20,17 @@ struct ReadMeshOptions {
     /// Keep per-vertex scalar properties of a PLY file (other than x, y, z) in
     /// ReadMeshResult::vertexProperties (e.g. to carry `quality` or features on).
     bool keepVertexProperties = false;
+    /// Keep per-vertex list properties of a PLY file (e.g. GigaMesh's `feature_vector`) as
+    /// float properties `<name>_00`, `<name>_01`, ... (element index, zero-based), after the
+    /// scalar ones. Every vertex must have a list of the same length (else InvalidInputError).
+    bool keepVertexLists = false;
 };
 
 struct ReadMeshResult {
     TriMesh mesh;
     std::string format;                          ///< "ply-binary", "ply-ascii", "obj", "off", "stl"
     std::size_t numPolygonsRead = 0;             ///< faces/strips as found in the file
-    std::vector<VertexProperty> vertexProperties; ///< only with keepVertexProperties
+    std::vector<VertexProperty> vertexProperties; ///< only with keepVertexProperties/keepVertexLists
 };
 
 /// Reads a triangle mesh; the format is chosen by the file extension (case-insensitive).

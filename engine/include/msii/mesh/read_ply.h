@@ -7,8 +7,9 @@
 namespace msii {
 
 /// Reads a PLY file: `vertex` (x, y, z in any numeric type; other scalar properties kept
-/// with options.keepVertexProperties, list properties skipped), `face` (`vertex_indices` or
-/// `vertex_index`, any list/count types; polygons fan-triangulated) and `tristrips`
+/// with options.keepVertexProperties, list properties kept with options.keepVertexLists,
+/// else skipped), `face` (`vertex_indices` or `vertex_index`, any list/count types;
+/// polygons fan-triangulated) and `tristrips`
 /// (`vertex_indices`, -1 restarts a strip, alternating winding), unknown elements skipped.
 /// @throw IOError, InvalidInputError as readMesh().
 ReadMeshResult readPly(const std::string& path, const ReadMeshOptions& options = {});

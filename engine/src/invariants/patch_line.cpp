@@ -1,0 +1,685 @@
+#include <msii/invariants/patch_line.h>
+
+#include <msii/core/errors.h>
+#include <msii/core/stopwatch.h>
+#include <msii/invariants/scales.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <unordered_map>
+
+namespace msii {
+namespace {
+
+// ---------------------------------------------------------------------------------------
+// Cells: integer coordinates floor(x / h0) shifted by kOffset into [0, 2^21), packed as a
+// Morton code, so that a level-l cell is key >> 3l and an 8³ block of cells is key >> 9:
+// samples sorted by key are grouped by cell, by parent cell and by block at once.
+
+constexpr std::int64_t kOffset = std::int64_t(1) << 20;
+constexpr std::int64_t kCoordLimit = std::int64_t(1) << 21;
+
+inline std::uint64_t spreadBits(std::uint64_t v)  // 21 bits -> every third bit
+{
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffULL;
+    v = (v | v << 16) & 0x1f0000ff0000ffULL;
+    v = (v | v << 8) & 0x100f00f00f00f00fULL;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+    v = (v | v << 2) & 0x1249249249249249ULL;
+    return v;
+}
+
+inline std::uint64_t morton(std::uint64_t x, std::uint64_t y, std::uint64_t z)
+{
+    return spreadBits(x) | spreadBits(y) << 1 | spreadBits(z) << 2;
+}
+
+struct CellCoord {
+    std::int64_t x, y, z;  // shifted, level 0
+};
+
+inline CellCoord cellOf(const Vec3& p, double h0)
+{
+    return {std::int64_t(std::floor(p.x / h0)) + kOffset, std::int64_t(std::floor(p.y / h0)) + kOffset,
+            std::int64_t(std::floor(p.z / h0)) + kOffset};
+}
+
+// ---------------------------------------------------------------------------------------
+// Samples of one level, as running sums in double (merged exactly between levels) and, for
+// the gather, as floats relative to a group's origin.
+
+struct SampleSums {
+    std::uint64_t key = 0;
+    double area = 0;
+    Vec3 moment;      // Σ a·c (first moment)
+    std::array<double, 6> normalTensor{};  // Σ a·n nᵀ: xx, yy, zz, xy, xz, yz
+};
+
+struct Level {
+    double h = 0;
+    std::vector<std::uint64_t> key;
+    std::vector<double> cx, cy, cz;       // centroids
+    std::vector<float> area;
+    /// Mean of n nᵀ over the sample's area (xx, yy, zz, xy, xz, yz): (û·n)² averaged over a
+    /// piece that spans a crease, where the mean normal would be wrong for both sides.
+    std::array<std::vector<float>, 6> tensor;
+    std::unordered_map<std::uint64_t, std::pair<std::uint32_t, std::uint32_t>> blocks;
+};
+
+/// One piece of a triangle cut into m² congruent sub-triangles: row i, column j, up or down.
+struct Piece {
+    std::uint64_t key;
+    std::uint32_t triangle;
+    std::uint32_t sub;  // i << 16 | j << 1 | down
+};
+
+inline std::array<Vec3, 3> pieceCorners(const std::array<Vec3, 3>& t, int m, std::uint32_t sub)
+{
+    const int i = int(sub >> 16), j = int((sub >> 1) & 0x7fff);
+    const bool down = sub & 1;
+    const Vec3 u = (t[1] - t[0]) / double(m), v = (t[2] - t[0]) / double(m);
+    const auto at = [&](int a, int b) { return t[0] + u * double(a) + v * double(b); };
+    if (!down) return {at(i, j), at(i + 1, j), at(i, j + 1)};
+    return {at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)};
+}
+
+inline int piecesPerSide(const std::array<Vec3, 3>& t, double h0)
+{
+    const double longest = std::sqrt(std::max({squaredNorm(t[1] - t[0]), squaredNorm(t[2] - t[1]),
+                                               squaredNorm(t[0] - t[2])}));
+    return std::max(1, int(std::ceil(longest / h0)));
+}
+
+/// Runs of equal keys in a sorted range, for parallel reduction: chunk starts moved forward
+/// to the beginning of a run.
+template <class KeyAt>
+std::vector<std::size_t> runAlignedChunks(std::size_t n, std::size_t chunks, KeyAt keyAt)
+{
+    std::vector<std::size_t> start;
+    for (std::size_t c = 0; c < chunks; ++c) {
+        std::size_t s = n * c / chunks;
+        while (s > 0 && s < n && keyAt(s) == keyAt(s - 1)) ++s;
+        if (start.empty() || s > start.back()) start.push_back(s);
+    }
+    if (start.empty() || start.back() != n) start.push_back(n);
+    return start;
+}
+
+std::vector<SampleSums> finestSamples(const TriMesh& mesh, double h0)
+{
+    const std::size_t nt = mesh.numTriangles();
+    std::vector<std::uint64_t> first(nt + 1, 0);
+    std::vector<int> sides(nt);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt), [&](const auto& r) {
+        for (std::size_t t = r.begin(); t < r.end(); ++t) {
+            const auto& tri = mesh.triangles[t];
+            sides[t] = piecesPerSide({mesh.points[tri[0]], mesh.points[tri[1]], mesh.points[tri[2]]}, h0);
+            if (sides[t] > 0x7fff) throw InvalidInputError("a triangle is too large for the sample cells");
+        }
+    });
+    for (std::size_t t = 0; t < nt; ++t) first[t + 1] = first[t] + std::uint64_t(sides[t]) * sides[t];
+
+    std::vector<Piece> pieces(first[nt]);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt), [&](const auto& r) {
+        for (std::size_t t = r.begin(); t < r.end(); ++t) {
+            const auto& tri = mesh.triangles[t];
+            const std::array<Vec3, 3> v{mesh.points[tri[0]], mesh.points[tri[1]], mesh.points[tri[2]]};
+            const int m = sides[t];
+            std::uint64_t k = first[t];
+            for (int i = 0; i < m; ++i)
+                for (int j = 0; i + j < m; ++j)
+                    for (int down = 0; down < 2; ++down) {
+                        if (down && i + j > m - 2) continue;
+                        const std::uint32_t sub = std::uint32_t(i) << 16 | std::uint32_t(j) << 1 | std::uint32_t(down);
+                        const auto c = pieceCorners(v, m, sub);
+                        const CellCoord cell = cellOf((c[0] + c[1] + c[2]) / 3.0, h0);
+                        pieces[k++] = {morton(std::uint64_t(cell.x), std::uint64_t(cell.y), std::uint64_t(cell.z)),
+                                       std::uint32_t(t), sub};
+                    }
+        }
+    });
+    tbb::parallel_sort(pieces.begin(), pieces.end(), [](const Piece& a, const Piece& b) {
+        return a.key != b.key ? a.key < b.key : a.triangle != b.triangle ? a.triangle < b.triangle : a.sub < b.sub;
+    });
+
+    // One sample per run of equal keys; chunks aligned to runs keep the sums deterministic.
+    const auto chunks = runAlignedChunks(pieces.size(), 256, [&](std::size_t i) { return pieces[i].key; });
+    std::vector<std::vector<SampleSums>> parts(chunks.size() - 1);
+    tbb::parallel_for(std::size_t(0), parts.size(), [&](std::size_t c) {
+        auto& out = parts[c];
+        for (std::size_t i = chunks[c]; i < chunks[c + 1]; ++i) {
+            const Piece& p = pieces[i];
+            const auto& tri = mesh.triangles[p.triangle];
+            const std::array<Vec3, 3> v{mesh.points[tri[0]], mesh.points[tri[1]], mesh.points[tri[2]]};
+            const int m = sides[p.triangle];
+            const auto c3 = pieceCorners(v, m, p.sub);
+            const Vec3 normalArea = cross(v[1] - v[0], v[2] - v[0]) * (0.5 / (double(m) * m));
+            const double a = norm(normalArea);
+            const Vec3 nrm = a > 0 ? normalArea / a : Vec3();
+            const Vec3 centroid = (c3[0] + c3[1] + c3[2]) / 3.0;
+            if (out.empty() || out.back().key != p.key) out.push_back(SampleSums{p.key, 0, {}, {}});
+            SampleSums& s = out.back();
+            s.area += a;
+            s.moment += centroid * a;
+            const std::array<double, 6> nn{nrm.x * nrm.x, nrm.y * nrm.y, nrm.z * nrm.z,
+                                           nrm.x * nrm.y, nrm.x * nrm.z, nrm.y * nrm.z};
+            for (int q = 0; q < 6; ++q) s.normalTensor[std::size_t(q)] += a * nn[std::size_t(q)];
+        }
+    });
+    std::vector<SampleSums> samples;
+    for (auto& part : parts) samples.insert(samples.end(), part.begin(), part.end());
+    return samples;
+}
+
+std::vector<SampleSums> coarser(const std::vector<SampleSums>& fine)
+{
+    std::vector<SampleSums> out;
+    for (const SampleSums& s : fine) {
+        const std::uint64_t key = s.key >> 3;
+        if (out.empty() || out.back().key != key) out.push_back(SampleSums{key, 0, {}, {}});
+        SampleSums& c = out.back();
+        c.area += s.area;
+        c.moment += s.moment;
+        for (std::size_t q = 0; q < 6; ++q) c.normalTensor[q] += s.normalTensor[q];
+    }
+    return out;
+}
+
+Level makeLevel(const std::vector<SampleSums>& sums, double h)
+{
+    Level level;
+    level.h = h;
+    const std::size_t n = sums.size();
+    level.key.resize(n);
+    level.cx.resize(n), level.cy.resize(n), level.cz.resize(n);
+    level.area.resize(n);
+    for (auto& t : level.tensor) t.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const SampleSums& s = sums[i];
+        level.key[i] = s.key;
+        const Vec3 c = s.area > 0 ? s.moment / s.area : Vec3();
+        level.cx[i] = c.x, level.cy[i] = c.y, level.cz[i] = c.z;
+        level.area[i] = float(s.area);
+        for (std::size_t q = 0; q < 6; ++q)
+            level.tensor[q][i] = s.area > 0 ? float(s.normalTensor[q] / s.area) : 0.0f;
+    }
+    for (std::size_t i = 0; i < n;) {
+        std::size_t e = i;
+        while (e < n && (level.key[e] >> 9) == (level.key[i] >> 9)) ++e;
+        level.blocks.emplace(level.key[i] >> 9, std::make_pair(std::uint32_t(i), std::uint32_t(e)));
+        i = e;
+    }
+    return level;
+}
+
+// ---------------------------------------------------------------------------------------
+// The kernel: cubic B-spline K (knots at the integers, support [-2, 2], ∫K = 1, variance 1/3)
+// and its integral F.
+
+inline double bspline(double t)
+{
+    t = std::abs(t);
+    if (t >= 2) return 0.0;
+    if (t >= 1) return (2 - t) * (2 - t) * (2 - t) / 6.0;
+    return (4 - 6 * t * t + 3 * t * t * t) / 6.0;
+}
+
+inline double bsplineIntegral(double t)
+{
+    if (t <= -2) return 0.0;
+    if (t >= 2) return 1.0;
+    if (t < 0) return 1.0 - bsplineIntegral(-t);
+    if (t >= 1) return 1.0 - (2 - t) * (2 - t) * (2 - t) * (2 - t) / 24.0;
+    return 0.5 + (4 * t - 2 * t * t * t + 0.75 * t * t * t * t) / 6.0;
+}
+
+constexpr double kKernelVariance = 1.0 / 3.0;  // of K, in units of its knot spacing²
+/// Knot spacing of the kernel in cells of the level (support ±2 knots = ±4 cells): wide
+/// enough that the samples' irregular shapes average out (on a plane the scatter of L̂ is
+/// 2.5e-3 with 1 cell and 8e-4 with 2 at the first radius of a level).
+constexpr double kKernelCells = 2.0;
+/// On the finest level a sample holds only a few triangle pieces, so its shape is more
+/// irregular: the kernel is wider there (max |ΔL̂| on a plane 2.5e-3 → 8.8e-4).
+inline double kernelCells(int level) { return level == 0 ? 3.0 : kKernelCells; }
+/// Histogram bins per cell: a sample counts at its bin's centre, which blurs d by a
+/// uniform error of variance bin²/12, and moves it by at most h/64.
+constexpr int kBinsPerCell = 128;
+
+/// For @p n samples seen from p (coordinates relative to p): the histogram bin of the
+/// distance d = |x − p| (−1 beyond @p reach2, squared) and the coarea factor
+/// g = sqrt(1 − mean (û·n)²), from the sample's normal tensor t (xx, yy, zz, xy, xz, yz).
+/// Plain loops over floats, compiled for AVX2 as well (chosen at run time; same results).
+__attribute__((target_clones("avx2", "default"))) void binSamples(
+    std::size_t n, const float* __restrict x, const float* __restrict y,
+    const float* __restrict z, const float* __restrict txx, const float* __restrict tyy,
+    const float* __restrict tzz, const float* __restrict txy, const float* __restrict txz,
+    const float* __restrict tyz, float px, float py, float pz, float reach2, float invBin,
+    std::int32_t* __restrict bin, float* __restrict g)
+{
+    for (std::size_t s = 0; s < n; ++s) {
+        const float dx = x[s] - px, dy = y[s] - py, dz = z[s] - pz;
+        const float d2 = dx * dx + dy * dy + dz * dz;
+        const float q = dx * dx * txx[s] + dy * dy * tyy[s] + dz * dz * tzz[s] +
+                        2.0f * (dx * dy * txy[s] + dx * dz * txz[s] + dy * dz * tyz[s]);
+        const float t2 = q / (d2 + 1e-30f);  // branch-free, so that the loop vectorises
+        g[s] = std::sqrt(std::max(0.0f, 1.0f - t2));
+        const std::int32_t b = std::int32_t(std::sqrt(d2) * invBin);
+        bin[s] = d2 < reach2 ? b : -1;
+    }
+}
+
+/// Samples near a group of points, as floats relative to the group's origin.
+struct Gathered {
+    std::vector<float> x, y, z, a;
+    std::array<std::vector<float>, 6> t;
+    void clear()
+    {
+        x.clear(), y.clear(), z.clear(), a.clear();
+        for (auto& c : t) c.clear();
+    }
+};
+
+/// The kernel of one level: weights per radius and histogram bin.
+struct LevelKernel {
+    double h = 0, bin = 0, reach = 0;
+    int reachCells = 0, numBins = 0, numRadii = 0;
+    std::vector<double> weightP, weightL;  // [k * numBins + b]
+};
+
+/// Unnormalised P ∗ K and L ∗ K at @p points for the radii of one level: out[k·n + q].
+/// Points whose @p skip is set are left alone. Points go in groups of 4³ cells that share
+/// one gathered list of nearby samples.
+void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
+                    const std::vector<Vec3>& points, const std::vector<char>& skip,
+                    std::vector<float>& outP, std::vector<float>& outL, Progress* progress)
+{
+    const std::size_t n = points.size();
+    const int l = int(std::lround(std::log2(level.h / h0)));
+    const double h = level.h;
+    outP.assign(std::size_t(kernel.numRadii) * n, 0.0f);
+    outL.assign(std::size_t(kernel.numRadii) * n, 0.0f);
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> order(n);
+    std::vector<CellCoord> cell(n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            const CellCoord c0 = cellOf(points[i], h0);
+            cell[i] = {c0.x >> l, c0.y >> l, c0.z >> l};
+            order[i] = {morton(std::uint64_t(cell[i].x), std::uint64_t(cell[i].y), std::uint64_t(cell[i].z)) >> 6,
+                        std::uint32_t(i)};
+        }
+    });
+    tbb::parallel_sort(order.begin(), order.end());
+    std::vector<std::size_t> groupStart;
+    for (std::size_t i = 0; i < n; ++i)
+        if (i == 0 || order[i].first != order[i - 1].first) groupStart.push_back(i);
+    groupStart.push_back(n);
+
+    const int reachCells = kernel.reachCells, numBins = kernel.numBins, nr = kernel.numRadii;
+    if (progress) progress->start("P and L, level " + std::to_string(l), groupStart.size() - 1);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groupStart.size() - 1), [&](const auto& range) {
+        Gathered near;
+        std::vector<std::int32_t> bins;
+        std::vector<float> factor;
+        std::vector<float> hist(2 * static_cast<std::size_t>(numBins));
+        for (std::size_t g = range.begin(); g < range.end(); ++g) {
+            const std::size_t begin = groupStart[g], end = groupStart[g + 1];
+            const CellCoord& c0 = cell[order[begin].second];
+            const std::int64_t gx = c0.x & ~std::int64_t(3), gy = c0.y & ~std::int64_t(3), gz = c0.z & ~std::int64_t(3);
+            const double ox = double(gx - (kOffset >> l)) * h, oy = double(gy - (kOffset >> l)) * h,
+                         oz = double(gz - (kOffset >> l)) * h;
+            near.clear();
+            for (std::int64_t bx = std::max<std::int64_t>(0, gx - reachCells) >> 3; bx <= (gx + 3 + reachCells) >> 3; ++bx)
+                for (std::int64_t by = std::max<std::int64_t>(0, gy - reachCells) >> 3; by <= (gy + 3 + reachCells) >> 3; ++by)
+                    for (std::int64_t bz = std::max<std::int64_t>(0, gz - reachCells) >> 3; bz <= (gz + 3 + reachCells) >> 3; ++bz) {
+                        const auto it = level.blocks.find(morton(std::uint64_t(bx), std::uint64_t(by), std::uint64_t(bz)));
+                        if (it == level.blocks.end()) continue;
+                        for (std::uint32_t s = it->second.first; s < it->second.second; ++s) {
+                            near.x.push_back(float(level.cx[s] - ox));
+                            near.y.push_back(float(level.cy[s] - oy));
+                            near.z.push_back(float(level.cz[s] - oz));
+                            near.a.push_back(level.area[s]);
+                            for (std::size_t c = 0; c < 6; ++c) near.t[c].push_back(level.tensor[c][s]);
+                        }
+                    }
+            const std::size_t ns = near.x.size();
+            bins.resize(ns), factor.resize(ns);
+            for (std::size_t q = begin; q < end; ++q) {
+                const std::uint32_t i = order[q].second;
+                if (skip[i]) continue;
+                binSamples(ns, near.x.data(), near.y.data(), near.z.data(), near.t[0].data(),
+                           near.t[1].data(), near.t[2].data(), near.t[3].data(), near.t[4].data(),
+                           near.t[5].data(), float(points[i].x - ox), float(points[i].y - oy),
+                           float(points[i].z - oz), float(kernel.reach * kernel.reach),
+                           float(1.0 / kernel.bin), bins.data(), factor.data());
+                std::fill(hist.begin(), hist.end(), 0.0f);
+                for (std::size_t s = 0; s < ns; ++s) {
+                    if (bins[s] < 0) continue;
+                    float* at = hist.data() + 2 * std::size_t(bins[s]);
+                    at[0] += near.a[s];              // area
+                    at[1] += near.a[s] * factor[s];  // area·g
+                }
+                for (int k = 0; k < nr; ++k) {
+                    double sumP = 0, sumL = 0;
+                    const double* wp = kernel.weightP.data() + std::size_t(k) * numBins;
+                    const double* wl = kernel.weightL.data() + std::size_t(k) * numBins;
+                    for (int b = 0; b < numBins; ++b) {
+                        sumP += double(hist[2 * std::size_t(b)]) * wp[b];
+                        sumL += double(hist[2 * std::size_t(b) + 1]) * wl[b];
+                    }
+                    outP[std::size_t(k) * n + i] = float(sumP);
+                    outL[std::size_t(k) * n + i] = float(sumL);
+                }
+            }
+            if (progress) progress->advance();
+        }
+    });
+    if (progress) progress->end();
+}
+
+/// Interpolates fields given at the samples of @p level (values[k·numSamples + s], k <
+/// numFields) to the points @p p with normals @p n (out[k·n + i]; points with @p skip set
+/// are left alone): a linear fit in the tangent plane (value and two slopes) over the
+/// samples within 2h, weighted (1 − (d/2h)²)², so linear fields are reproduced; the
+/// weighted mean where the samples do not span the plane. Points go in groups of 4³ cells.
+void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec3>& p,
+                            const std::vector<Vec3>& n, const std::vector<char>& skip,
+                            int numFields, const std::vector<const float*>& values,
+                            const std::vector<float*>& out)
+{
+    const std::size_t np = p.size();
+    const int l = int(std::lround(std::log2(level.h / h0)));
+    const double h = level.h, radius2 = 4.0 * h * h;
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> order(np);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            const CellCoord c = cellOf(p[i], h0);
+            order[i] = {morton(std::uint64_t(c.x >> l), std::uint64_t(c.y >> l), std::uint64_t(c.z >> l)) >> 6,
+                        std::uint32_t(i)};
+        }
+    });
+    tbb::parallel_sort(order.begin(), order.end());
+    std::vector<std::size_t> groupStart;
+    for (std::size_t i = 0; i < np; ++i)
+        if (i == 0 || order[i].first != order[i - 1].first) groupStart.push_back(i);
+    groupStart.push_back(np);
+
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groupStart.size() - 1), [&](const auto& range) {
+        std::vector<std::uint32_t> near, index;
+        std::vector<double> weight;
+        std::vector<std::array<double, 3>> basis;
+        for (std::size_t g = range.begin(); g < range.end(); ++g) {
+            const CellCoord c0 = cellOf(p[order[groupStart[g]].second], h0);
+            const std::int64_t gx = (c0.x >> l) & ~std::int64_t(3), gy = (c0.y >> l) & ~std::int64_t(3),
+                               gz = (c0.z >> l) & ~std::int64_t(3);
+            near.clear();
+            for (std::int64_t bx = (gx - 3) >> 3; bx <= (gx + 6) >> 3; ++bx)
+                for (std::int64_t by = (gy - 3) >> 3; by <= (gy + 6) >> 3; ++by)
+                    for (std::int64_t bz = (gz - 3) >> 3; bz <= (gz + 6) >> 3; ++bz) {
+                        const auto it = level.blocks.find(morton(std::uint64_t(bx), std::uint64_t(by), std::uint64_t(bz)));
+                        if (it == level.blocks.end()) continue;
+                        for (std::uint32_t s = it->second.first; s < it->second.second; ++s) near.push_back(s);
+                    }
+            for (std::size_t q = groupStart[g]; q < groupStart[g + 1]; ++q) {
+                const std::uint32_t i = order[q].second;
+                if (skip[i]) continue;
+                const Vec3& nrm = n[i];
+                const Vec3 u = normalized(std::abs(nrm.x) < 0.9 ? cross(nrm, Vec3(1, 0, 0)) : cross(nrm, Vec3(0, 1, 0)));
+                const Vec3 v = cross(nrm, u);
+                double m[3][3] = {};
+                index.clear(), weight.clear(), basis.clear();
+                for (std::uint32_t s : near) {
+                    const Vec3 d(level.cx[s] - p[i].x, level.cy[s] - p[i].y, level.cz[s] - p[i].z);
+                    const double q2 = squaredNorm(d) / radius2;
+                    if (q2 >= 1.0) continue;
+                    const double wt = (1.0 - q2) * (1.0 - q2);
+                    const std::array<double, 3> phi{1.0, dot(d, u) / h, dot(d, v) / h};
+                    for (int a = 0; a < 3; ++a)
+                        for (int b = 0; b < 3; ++b) m[a][b] += wt * phi[a] * phi[b];
+                    index.push_back(s);
+                    weight.push_back(wt);
+                    basis.push_back(phi);
+                }
+                if (index.empty()) continue;
+                // First row of m⁻¹ (cofactors): the fitted value is Σ wt·(row·φ)·f.
+                const double c00 = m[1][1] * m[2][2] - m[1][2] * m[2][1];
+                const double c01 = -(m[1][0] * m[2][2] - m[1][2] * m[2][0]);
+                const double c02 = m[1][0] * m[2][1] - m[1][1] * m[2][0];
+                const double det = m[0][0] * c00 + m[0][1] * c01 + m[0][2] * c02;
+                const bool linear = det > 1e-6 * m[0][0] * m[0][0] * m[0][0];
+                for (std::size_t k = 0; k < index.size(); ++k)
+                    weight[k] *= linear ? (c00 * basis[k][0] + c01 * basis[k][1] + c02 * basis[k][2]) / det
+                                        : 1.0 / m[0][0];
+                for (int f = 0; f < numFields; ++f) {
+                    double sum = 0;
+                    for (std::size_t k = 0; k < index.size(); ++k)
+                        sum += weight[k] * values[std::size_t(f)][index[k]];
+                    out[std::size_t(f)][i] = float(sum);
+                }
+            }
+        }
+    });
+}
+
+/// Bias removal across radii (module comment, step 4), per vertex: the estimates are
+/// P ∗ K and L ∗ K, blurred across r with variance σ²_j. For P the blur of πr² (the
+/// cone part, exact for planes, spheres, edges and corners) was divided out per radius;
+/// what remains is removed with a fit P̂ ≈ a + b r + c r² (resp. L̂) over the vertex's
+/// radii: (σ²/2)·(P − cone)'' / (πr²) = σ²(2b/r + 5c) and (σ²/2)·L'' / (2πr) = σ²(b/r + 3c).
+void removeCurvatureBlur(std::vector<std::vector<float>>& values, const std::vector<double>& radii,
+                         const std::vector<double>& variance, const std::vector<char>& fitted,
+                         bool patch)
+{
+    if (values.empty() || radii.size() < 4) return;
+    const std::size_t nv = values.front().size(), nr = radii.size();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& range) {
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+            // Normal equations of the least-squares fit over the radii with a value.
+            double m[3][3] = {}, rhs[3] = {};
+            std::size_t count = 0;
+            for (std::size_t j = 0; j < nr; ++j) {
+                const float v = values[j][i];
+                if (std::isnan(v) || !fitted[j]) continue;
+                const double basis[3] = {1.0, radii[j], radii[j] * radii[j]};
+                for (int u = 0; u < 3; ++u) {
+                    rhs[u] += basis[u] * v;
+                    for (int w = 0; w < 3; ++w) m[u][w] += basis[u] * basis[w];
+                }
+                ++count;
+            }
+            if (count < 4) continue;
+            // Cramer's rule for b and c.
+            const auto det3 = [](const double a[3][3]) {
+                return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+                       a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+                       a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+            };
+            const double det = det3(m);
+            if (!(std::abs(det) > 0)) continue;
+            double mb[3][3], mc[3][3];
+            for (int u = 0; u < 3; ++u)
+                for (int w = 0; w < 3; ++w) {
+                    mb[u][w] = w == 1 ? rhs[u] : m[u][w];
+                    mc[u][w] = w == 2 ? rhs[u] : m[u][w];
+                }
+            const double b = det3(mb) / det, c = det3(mc) / det;
+            for (std::size_t j = 0; j < nr; ++j) {
+                float& v = values[j][i];
+                if (std::isnan(v)) continue;
+                const double r = radii[j];
+                v = float(v - variance[j] * (patch ? 2.0 * b / r + 5.0 * c : b / r + 3.0 * c));
+            }
+        }
+    });
+}
+
+/// Unit vertex normals: sums of the incident faces' vector areas.
+std::vector<Vec3> areaWeightedNormals(const TriMesh& mesh)
+{
+    std::vector<Vec3> normal(mesh.numVertices());
+    for (const Triangle& t : mesh.triangles) {
+        const Vec3 area = cross(mesh.points[t[1]] - mesh.points[t[0]], mesh.points[t[2]] - mesh.points[t[0]]);
+        for (std::uint32_t v : t) normal[v] += area;
+    }
+    for (Vec3& n : normal) {
+        const double len = norm(n);
+        n = len > 0 ? n / len : Vec3(0, 0, 1);
+    }
+    return normal;
+}
+
+} // namespace
+
+PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& options,
+                                 Progress* progress)
+{
+    const auto& radii = options.radii;
+    if (radii.empty()) throw InvalidInputError("no radii given");
+    for (std::size_t j = 0; j < radii.size(); ++j) {
+        if (!(radii[j] > 0) || !std::isfinite(radii[j]))
+            throw InvalidInputError("radii must be positive and finite");
+        if (j > 0 && !(radii[j] > radii[j - 1]))
+            throw InvalidInputError("radii must be strictly ascending");
+    }
+    const double h0 = options.cellSize;
+    if (!(h0 > 0) || !std::isfinite(h0)) throw InvalidInputError("the sample cell size must be positive");
+    if (!(options.minCellsPerRadius >= 1))
+        throw InvalidInputError("the precision (cells per radius) must be at least 1");
+    const std::size_t nv = mesh.numVertices();
+    if (!options.borderDistance.empty() && options.borderDistance.size() != nv)
+        throw InvalidInputError("border distances do not match the vertex count");
+    for (const Vec3& p : mesh.points) {
+        const CellCoord c = cellOf(p, h0);
+        if (c.x < 0 || c.y < 0 || c.z < 0 || c.x >= kCoordLimit || c.y >= kCoordLimit || c.z >= kCoordLimit)
+            throw InvalidInputError("the mesh reaches more than a million sample cells from the origin; "
+                                    "use a larger voxel size or move the mesh near the origin");
+    }
+
+    PatchLineResult result;
+    result.radii = radii;
+    result.levelOfRadius = gridLevelOfRadius(radii, h0, options.minCellsPerRadius);
+    const int numLevels = *std::max_element(result.levelOfRadius.begin(), result.levelOfRadius.end()) + 1;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    if (options.computePatch) result.patch.assign(radii.size(), std::vector<float>(nv, nan));
+    if (options.computeLine) result.line.assign(radii.size(), std::vector<float>(nv, nan));
+    if (!options.computePatch && !options.computeLine) return result;
+
+    Stopwatch stage;
+    std::vector<Level> levels;
+    {
+        std::vector<SampleSums> sums = finestSamples(mesh, h0);
+        result.numSamples = sums.size();
+        for (int l = 0; l < numLevels; ++l) {
+            if (l > 0) sums = coarser(sums);
+            levels.push_back(makeLevel(sums, h0 * double(1 << l)));
+        }
+    }
+    result.samplingSeconds = stage.seconds();
+    stage.restart();
+
+    std::vector<double> variance(radii.size());  // of the blur across r, per radius
+    std::vector<char> fitted(radii.size(), 1);    // full-width kernel: used by the fit
+    std::vector<Vec3> vertexNormal;                // for interpolation, when needed
+
+    for (int l = 0; l < numLevels; ++l) {
+        std::vector<int> levelRadii;
+        for (std::size_t j = 0; j < radii.size(); ++j)
+            if (result.levelOfRadius[j] == l) levelRadii.push_back(int(j));
+        if (levelRadii.empty()) continue;
+        const Level& level = levels[std::size_t(l)];
+        LevelKernel kernel;
+        kernel.h = level.h;
+        kernel.bin = level.h / kBinsPerCell;
+        kernel.numRadii = int(levelRadii.size());
+        // Kernel knot spacing per radius: kKernelCells cells, but at most r/2 so that the
+        // kernel stays within d >= 0 (small radii on the finest level).
+        std::vector<double> kw(levelRadii.size());
+        for (std::size_t k = 0; k < kw.size(); ++k)
+            kw[k] = std::min(kernelCells(l) * level.h, 0.5 * radii[std::size_t(levelRadii[k])]);
+        kernel.reach = radii[std::size_t(levelRadii.back())] + 2.0 * kw.back();
+        kernel.reachCells = int(std::ceil(kernel.reach / level.h)) + 1;
+        kernel.numBins = int(std::ceil(kernel.reach / kernel.bin)) + 2;
+        // Weights per radius and bin centre d_b = (b + 1/2)·bin (paper Eq. 2 for P and L as
+        // sums over the distance histogram), and the blur across r each gives (kernel and
+        // binning).
+        kernel.weightP.resize(kw.size() * std::size_t(kernel.numBins));
+        kernel.weightL.resize(kernel.weightP.size());
+        for (std::size_t k = 0; k < kw.size(); ++k) {
+            const std::size_t j = std::size_t(levelRadii[k]);
+            for (int b = 0; b < kernel.numBins; ++b) {
+                const double d = (b + 0.5) * kernel.bin;
+                kernel.weightP[k * kernel.numBins + b] = bsplineIntegral((radii[j] - d) / kw[k]);
+                kernel.weightL[k * kernel.numBins + b] = bspline((d - radii[j]) / kw[k]) / kw[k];
+            }
+            variance[j] = kKernelVariance * kw[k] * kw[k] + kernel.bin * kernel.bin / 12.0;
+            fitted[j] = kw[k] == kernelCells(l) * level.h;
+        }
+
+        const auto masked = [&](std::size_t i, double r) {
+            return !options.borderDistance.empty() &&
+                   r + 4.0 * level.h + 2.0 * h0 > options.borderDistance[i];
+        };
+        const auto store = [&](std::size_t i, std::size_t k, double sumP, double sumL) {
+            const std::size_t j = std::size_t(levelRadii[k]);
+            const double r = radii[j];
+            if (masked(i, r)) return;
+            // P ∗ K of P = π r² is π (r² + σ²): divided out here (the cone part).
+            if (options.computePatch) result.patch[j][i] = float(sumP / (M_PI * (r * r + variance[j])));
+            if (options.computeLine) result.line[j][i] = float(sumL / (2.0 * M_PI * r));
+        };
+        std::vector<float> sumP, sumL;
+        const std::size_t numSamples = level.cx.size();
+        if (numSamples >= nv) {
+            // As many samples as vertices: evaluate at the vertices themselves.
+            std::vector<char> skip(nv);
+            for (std::size_t i = 0; i < nv; ++i) skip[i] = masked(i, radii[std::size_t(levelRadii.front())]);
+            evaluatePoints(level, kernel, h0, mesh.points, skip, sumP, sumL, progress);
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& range) {
+                for (std::size_t i = range.begin(); i < range.end(); ++i)
+                    for (std::size_t k = 0; k < levelRadii.size(); ++k)
+                        store(i, k, sumP[k * nv + i], sumL[k * nv + i]);
+            });
+        } else {
+            // Far fewer samples than vertices (coarse levels of dense meshes): evaluate at the
+            // samples (one per cell, on the surface) and interpolate to the vertices. P̂ and L̂
+            // vary on the scale of r >= 6h, so a linear fit over 2h loses about (h/r)²/8 of
+            // their variation.
+            std::vector<Vec3> at(numSamples);
+            for (std::size_t s = 0; s < numSamples; ++s) at[s] = Vec3(level.cx[s], level.cy[s], level.cz[s]);
+            evaluatePoints(level, kernel, h0, at, std::vector<char>(numSamples, 0), sumP, sumL, progress);
+            if (vertexNormal.empty()) vertexNormal = areaWeightedNormals(mesh);
+            const int nr = int(levelRadii.size());
+            std::vector<char> skip(nv);
+            for (std::size_t i = 0; i < nv; ++i) skip[i] = masked(i, radii[std::size_t(levelRadii.front())]);
+            std::vector<float> atP(std::size_t(nr) * nv), atL(std::size_t(nr) * nv);
+            std::vector<const float*> from;
+            std::vector<float*> to;
+            for (int k = 0; k < nr; ++k) {
+                from.push_back(sumP.data() + std::size_t(k) * numSamples);
+                from.push_back(sumL.data() + std::size_t(k) * numSamples);
+                to.push_back(atP.data() + std::size_t(k) * nv);
+                to.push_back(atL.data() + std::size_t(k) * nv);
+            }
+            interpolateFromSamples(level, h0, mesh.points, vertexNormal, skip, 2 * nr, from, to);
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& range) {
+                for (std::size_t i = range.begin(); i < range.end(); ++i)
+                    if (!skip[i])
+                        for (std::size_t k = 0; k < levelRadii.size(); ++k)
+                            store(i, k, atP[k * nv + i], atL[k * nv + i]);
+            });
+        }
+    }
+    removeCurvatureBlur(result.patch, radii, variance, fitted, true);
+    removeCurvatureBlur(result.line, radii, variance, fitted, false);
+    result.gatherSeconds = stage.seconds();
+    return result;
+}
+
+} // namespace msii
