@@ -12,4 +12,4 @@ mkdir -p "$out"
   --output "$out/tablet.ply"
 "$build_dir/tools/msii" compute "$out/tablet.ply" --radius 1.0 --scales 16 --overwrite \
   --output "$out/tablet.msii.ply"
-echo "msii demo: results in $out (tablet.msii.ply: V_01..V_16, S_01..S_16, quality; tablet.msii.json)"
+echo "msii demo: results in $out (tablet.msii.ply: V_01..V_16, S_01..S_16, P_01..P_16, L_01..L_16, quality; tablet.msii.json)"
