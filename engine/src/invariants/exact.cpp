@@ -1,6 +1,7 @@
 #include <msii/invariants/exact.h>
 
 #include <msii/core/errors.h>
+#include <msii/invariants/scales.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -347,13 +348,7 @@ private:
 void validate(const TriMesh& mesh, const ExactOptions& options)
 {
     const auto& radii = options.radii;
-    if (radii.empty()) throw InvalidInputError("no radii given");
-    for (std::size_t j = 0; j < radii.size(); ++j) {
-        if (!(radii[j] > 0) || !std::isfinite(radii[j]))
-            throw InvalidInputError("radii must be positive and finite");
-        if (j > 0 && !(radii[j] > radii[j - 1]))
-            throw InvalidInputError("radii must be strictly ascending");
-    }
+    validateRadii(radii);
     for (const std::uint32_t v : options.vertices)
         if (v >= mesh.numVertices()) {
             std::ostringstream msg;

@@ -294,6 +294,37 @@ struct LevelKernel {
     std::vector<double> weightP, weightL;  // [k * numBins + b]
 };
 
+/// Points in groups of 4³ cells of level l (Morton order), so that a group can share one
+/// gathered list of nearby samples: order[k] = (group key, point), groups
+/// [start[g], start[g + 1]), and each point's level-l cell.
+struct CellGroups {
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> order;
+    std::vector<std::size_t> start;
+    std::vector<CellCoord> cell;
+};
+
+CellGroups groupByCells(const std::vector<Vec3>& points, double h0, int l)
+{
+    const std::size_t n = points.size();
+    CellGroups g;
+    g.order.resize(n);
+    g.cell.resize(n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            const CellCoord c0 = cellOf(points[i], h0);
+            g.cell[i] = {c0.x >> l, c0.y >> l, c0.z >> l};
+            g.order[i] = {morton(std::uint64_t(g.cell[i].x), std::uint64_t(g.cell[i].y),
+                                 std::uint64_t(g.cell[i].z)) >> 6,
+                          std::uint32_t(i)};
+        }
+    });
+    tbb::parallel_sort(g.order.begin(), g.order.end());
+    for (std::size_t i = 0; i < n; ++i)
+        if (i == 0 || g.order[i].first != g.order[i - 1].first) g.start.push_back(i);
+    g.start.push_back(n);
+    return g;
+}
+
 /// Unnormalised P ∗ K and L ∗ K at @p points for the radii of one level: out[k·n + q].
 /// Points whose @p skip is set are left alone. Points go in groups of 4³ cells that share
 /// one gathered list of nearby samples.
@@ -306,21 +337,10 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
     const double h = level.h;
     outP.assign(std::size_t(kernel.numRadii) * n, 0.0f);
     outL.assign(std::size_t(kernel.numRadii) * n, 0.0f);
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> order(n);
-    std::vector<CellCoord> cell(n);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            const CellCoord c0 = cellOf(points[i], h0);
-            cell[i] = {c0.x >> l, c0.y >> l, c0.z >> l};
-            order[i] = {morton(std::uint64_t(cell[i].x), std::uint64_t(cell[i].y), std::uint64_t(cell[i].z)) >> 6,
-                        std::uint32_t(i)};
-        }
-    });
-    tbb::parallel_sort(order.begin(), order.end());
-    std::vector<std::size_t> groupStart;
-    for (std::size_t i = 0; i < n; ++i)
-        if (i == 0 || order[i].first != order[i - 1].first) groupStart.push_back(i);
-    groupStart.push_back(n);
+    const CellGroups groups = groupByCells(points, h0, l);
+    const auto& order = groups.order;
+    const auto& groupStart = groups.start;
+    const auto& cell = groups.cell;
 
     const int reachCells = kernel.reachCells, numBins = kernel.numBins, nr = kernel.numRadii;
     if (progress) progress->start("P and L, level " + std::to_string(l), groupStart.size() - 1);
@@ -394,31 +414,20 @@ void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec
                             int numFields, const std::vector<const float*>& values,
                             const std::vector<float*>& out)
 {
-    const std::size_t np = p.size();
     const int l = int(std::lround(std::log2(level.h / h0)));
     const double h = level.h, radius2 = 4.0 * h * h;
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> order(np);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            const CellCoord c = cellOf(p[i], h0);
-            order[i] = {morton(std::uint64_t(c.x >> l), std::uint64_t(c.y >> l), std::uint64_t(c.z >> l)) >> 6,
-                        std::uint32_t(i)};
-        }
-    });
-    tbb::parallel_sort(order.begin(), order.end());
-    std::vector<std::size_t> groupStart;
-    for (std::size_t i = 0; i < np; ++i)
-        if (i == 0 || order[i].first != order[i - 1].first) groupStart.push_back(i);
-    groupStart.push_back(np);
+    const CellGroups groups = groupByCells(p, h0, l);
+    const auto& order = groups.order;
+    const auto& groupStart = groups.start;
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groupStart.size() - 1), [&](const auto& range) {
         std::vector<std::uint32_t> near, index;
         std::vector<double> weight;
         std::vector<std::array<double, 3>> basis;
         for (std::size_t g = range.begin(); g < range.end(); ++g) {
-            const CellCoord c0 = cellOf(p[order[groupStart[g]].second], h0);
-            const std::int64_t gx = (c0.x >> l) & ~std::int64_t(3), gy = (c0.y >> l) & ~std::int64_t(3),
-                               gz = (c0.z >> l) & ~std::int64_t(3);
+            const CellCoord& c0 = groups.cell[order[groupStart[g]].second];
+            const std::int64_t gx = c0.x & ~std::int64_t(3), gy = c0.y & ~std::int64_t(3),
+                               gz = c0.z & ~std::int64_t(3);
             near.clear();
             for (std::int64_t bx = (gx - 3) >> 3; bx <= (gx + 6) >> 3; ++bx)
                 for (std::int64_t by = (gy - 3) >> 3; by <= (gy + 6) >> 3; ++by)
@@ -541,13 +550,7 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
                                  Progress* progress)
 {
     const auto& radii = options.radii;
-    if (radii.empty()) throw InvalidInputError("no radii given");
-    for (std::size_t j = 0; j < radii.size(); ++j) {
-        if (!(radii[j] > 0) || !std::isfinite(radii[j]))
-            throw InvalidInputError("radii must be positive and finite");
-        if (j > 0 && !(radii[j] > radii[j - 1]))
-            throw InvalidInputError("radii must be strictly ascending");
-    }
+    validateRadii(radii);
     const double h0 = options.cellSize;
     if (!(h0 > 0) || !std::isfinite(h0)) throw InvalidInputError("the sample cell size must be positive");
     if (!(options.minCellsPerRadius >= 1))

@@ -16,6 +16,17 @@ std::vector<double> equidistantRadii(double largestRadius, int scales)
     return radii;
 }
 
+void validateRadii(const std::vector<double>& radii)
+{
+    if (radii.empty()) throw InvalidInputError("no radii given");
+    for (std::size_t j = 0; j < radii.size(); ++j) {
+        if (!(radii[j] > 0) || !std::isfinite(radii[j]))
+            throw InvalidInputError("radii must be positive and finite");
+        if (j > 0 && !(radii[j] > radii[j - 1]))
+            throw InvalidInputError("radii must be strictly ascending");
+    }
+}
+
 std::vector<int> gridLevelOfRadius(const std::vector<double>& radii, double h0,
                                    double minCellsPerRadius)
 {

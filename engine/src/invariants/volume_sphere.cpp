@@ -380,13 +380,7 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
                                        const VolumeSphereOptions& options, Progress* progress)
 {
     const auto& radii = options.radii;
-    if (radii.empty()) throw InvalidInputError("no radii given");
-    for (std::size_t j = 0; j < radii.size(); ++j) {
-        if (!(radii[j] > 0) || !std::isfinite(radii[j]))
-            throw InvalidInputError("radii must be positive and finite");
-        if (j > 0 && !(radii[j] > radii[j - 1]))
-            throw InvalidInputError("radii must be strictly ascending");
-    }
+    validateRadii(radii);
     if (!(options.minVoxelsPerRadius >= 1))
         throw InvalidInputError("the precision (voxels per radius) must be at least 1");
     const std::size_t nv = mesh.numVertices();

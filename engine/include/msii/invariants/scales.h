@@ -9,6 +9,10 @@ namespace msii {
 /// Radii r_j = j·R/N for j = 1..N, ascending. @pre R > 0, N >= 1.
 std::vector<double> equidistantRadii(double largestRadius, int scales);
 
+/// @throw InvalidInputError if @p radii are empty, not positive and finite, or not strictly
+/// ascending (one sentence, for every algorithm that takes a list of radii).
+void validateRadii(const std::vector<double>& radii);
+
 /// The grid level of each radius for grid-based invariants: radius r goes to the coarsest
 /// level l (cell edge h0·2^l) with r / (h0·2^l) >= minCellsPerRadius, level 0 if none.
 /// Errors of voxel and sample sums follow h/r, so this keeps them flat across scales while
