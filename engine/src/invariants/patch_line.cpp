@@ -249,12 +249,13 @@ constexpr double kKernelCells = 2.0;
 /// On the finest level a sample holds only a few triangle pieces, so its shape is more
 /// irregular: the kernel is wider there (max |ΔL̂| on a plane 2.5e-3 → 8.8e-4).
 inline double kernelCells(int level) { return level == 0 ? 3.0 : kKernelCells; }
-/// Histogram bins per cell: a sample counts at its bin's centre, which blurs d by a
-/// uniform error of variance bin²/12, and moves it by at most h/64.
-constexpr int kBinsPerCell = 128;
+/// Histogram bins per cell. Linear sharing between bin centres blurs d by a tent of
+/// variance bin²/6; few bins keep the weighted sums per radius cheap.
+constexpr int kBinsPerCell = 8;
 
-/// For @p n samples seen from p (coordinates relative to p): the histogram bin of the
-/// distance d = |x − p| (−1 beyond @p reach2, squared) and the coarea factor
+/// For @p n samples seen from p (coordinates relative to p): the histogram bins of the
+/// distance d = |x − p|, shared linearly between the two nearest bin centres (bin b gets
+/// 1 − w, b + 1 gets w; b = −1 beyond @p reach2, squared), and the coarea factor
 /// g = sqrt(1 − mean (û·n)²), from the sample's normal tensor t (xx, yy, zz, xy, xz, yz).
 /// Plain loops over floats, compiled for AVX2 as well (chosen at run time; same results).
 __attribute__((target_clones("avx2", "default"))) void binSamples(
@@ -262,7 +263,7 @@ __attribute__((target_clones("avx2", "default"))) void binSamples(
     const float* __restrict z, const float* __restrict txx, const float* __restrict tyy,
     const float* __restrict tzz, const float* __restrict txy, const float* __restrict txz,
     const float* __restrict tyz, float px, float py, float pz, float reach2, float invBin,
-    std::int32_t* __restrict bin, float* __restrict g)
+    std::int32_t* __restrict bin, float* __restrict w, float* __restrict g)
 {
     for (std::size_t s = 0; s < n; ++s) {
         const float dx = x[s] - px, dy = y[s] - py, dz = z[s] - pz;
@@ -271,7 +272,9 @@ __attribute__((target_clones("avx2", "default"))) void binSamples(
                         2.0f * (dx * dy * txy[s] + dx * dz * txz[s] + dy * dz * tyz[s]);
         const float t2 = q / (d2 + 1e-30f);  // branch-free, so that the loop vectorises
         g[s] = std::sqrt(std::max(0.0f, 1.0f - t2));
-        const std::int32_t b = std::int32_t(std::sqrt(d2) * invBin);
+        const float u = std::max(0.0f, std::sqrt(d2) * invBin - 0.5f);
+        const std::int32_t b = std::int32_t(u);
+        w[s] = u - float(b);
         bin[s] = d2 < reach2 ? b : -1;
     }
 }
@@ -347,8 +350,8 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groupStart.size() - 1), [&](const auto& range) {
         Gathered near;
         std::vector<std::int32_t> bins;
-        std::vector<float> factor;
-        std::vector<float> hist(2 * static_cast<std::size_t>(numBins));
+        std::vector<float> frac, factor;
+        std::vector<float> hist(2 * static_cast<std::size_t>(numBins) + 2);
         for (std::size_t g = range.begin(); g < range.end(); ++g) {
             const std::size_t begin = groupStart[g], end = groupStart[g + 1];
             const CellCoord& c0 = cell[order[begin].second];
@@ -370,7 +373,7 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                         }
                     }
             const std::size_t ns = near.x.size();
-            bins.resize(ns), factor.resize(ns);
+            bins.resize(ns), frac.resize(ns), factor.resize(ns);
             for (std::size_t q = begin; q < end; ++q) {
                 const std::uint32_t i = order[q].second;
                 if (skip[i]) continue;
@@ -378,13 +381,16 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                            near.t[1].data(), near.t[2].data(), near.t[3].data(), near.t[4].data(),
                            near.t[5].data(), float(points[i].x - ox), float(points[i].y - oy),
                            float(points[i].z - oz), float(kernel.reach * kernel.reach),
-                           float(1.0 / kernel.bin), bins.data(), factor.data());
+                           float(1.0 / kernel.bin), bins.data(), frac.data(), factor.data());
                 std::fill(hist.begin(), hist.end(), 0.0f);
                 for (std::size_t s = 0; s < ns; ++s) {
                     if (bins[s] < 0) continue;
                     float* at = hist.data() + 2 * std::size_t(bins[s]);
-                    at[0] += near.a[s];              // area
-                    at[1] += near.a[s] * factor[s];  // area·g
+                    const float a = near.a[s], ag = a * factor[s], w = frac[s];
+                    at[0] += a - a * w;    // area, bin b
+                    at[1] += ag - ag * w;  // area·g, bin b
+                    at[2] += a * w;        // bin b + 1
+                    at[3] += ag * w;
                 }
                 for (int k = 0; k < nr; ++k) {
                     double sumP = 0, sumL = 0;
@@ -621,7 +627,7 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
                 kernel.weightP[k * kernel.numBins + b] = bsplineIntegral((radii[j] - d) / kw[k]);
                 kernel.weightL[k * kernel.numBins + b] = bspline((d - radii[j]) / kw[k]) / kw[k];
             }
-            variance[j] = kKernelVariance * kw[k] * kw[k] + kernel.bin * kernel.bin / 12.0;
+            variance[j] = kKernelVariance * kw[k] * kw[k] + kernel.bin * kernel.bin / 6.0;
             fitted[j] = kw[k] == kernelCells(l) * level.h;
         }
 
