@@ -208,12 +208,12 @@ TEST(PatchLine, TabletAgainstExactMode)
         ++checked;
     }
     ASSERT_GE(checked, 14u);
-    // V and S meet the bounds (mean 1e-3, max 1e-2) but for S at the first radius
-    // of the finest level (measured max 1.1e-2).
+    // V and S meet the bounds (mean 1e-3, max 1e-2): measured worst means 3.8e-4
+    // and 7.0e-4, maxima 4.5e-3 and 6.8e-3.
     EXPECT_LE(worstMean[0], 1e-3);
     EXPECT_LE(worstMax[0], 1e-2);
     EXPECT_LE(worstMean[1], 1e-3);
-    EXPECT_LE(worstMax[1], 1.5e-2);
+    EXPECT_LE(worstMax[1], 1e-2);
     // P and L do not yet (README, limits): measured worst means 1.0e-2 (P) and 8.9e-3 (L),
     // maxima 7.9e-2 and 4.4e-2, at the smallest and the largest radius.
     EXPECT_LE(worstMean[2], 1.5e-2);
