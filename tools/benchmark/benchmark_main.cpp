@@ -91,12 +91,7 @@ int main(int argc, char** argv)
         o.computeLine = has('L');
         last = computeInvariants(mesh, o);
         const Stopwatch writing;
-        Features features;
-        features.volume = &last.invariants.volume;
-        features.sphere = &last.invariants.sphere;
-        features.patch = &last.patchLine.patch;
-        features.line = &last.patchLine.line;
-        writePly(output, mesh, featureProperties(features));
+        writePly(output, mesh, featureProperties(featuresOf(last.invariants, last.patchLine)));
         write.push_back(writing.seconds());
         total.push_back(wall.seconds());
         check.push_back(last.timings.check);

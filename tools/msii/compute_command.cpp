@@ -182,9 +182,10 @@ void computeOne(const ComputeArgs& args, const std::string& input, const std::st
     const Selection sel = parseInvariants(args);
     if (args.gigamesh && !sel.volume && !sel.patch)
         throw InvalidInputError("--gigamesh writes V and P; select at least one of them");
+    const std::vector<std::string> gigameshFiles =
+        args.gigamesh ? gigameshPaths(args, input, output, sel) : std::vector<std::string>{};
     std::vector<std::string> outputs{output, sidecar};
-    if (args.gigamesh)
-        for (const auto& path : gigameshPaths(args, input, output, sel)) outputs.push_back(path);
+    outputs.insert(outputs.end(), gigameshFiles.begin(), gigameshFiles.end());
     for (const auto& path : outputs) {
         if (!args.overwrite && fs::exists(path))
             throw IOError("'" + path + "' exists already (use --overwrite to replace it)");
@@ -229,11 +230,7 @@ void computeOne(const ComputeArgs& args, const std::string& input, const std::st
 
     const auto& inv = result.invariants;
     const auto& pl = result.patchLine;
-    Features features;
-    features.volume = &inv.volume;
-    features.sphere = &inv.sphere;
-    features.patch = &pl.patch;
-    features.line = &pl.line;
+    const Features features = featuresOf(inv, pl);
     const std::vector<VertexProperty> props = featureProperties(features);
     const std::size_t n = inv.radii.size();
     std::string letters;
@@ -253,7 +250,6 @@ void computeOne(const ComputeArgs& args, const std::string& input, const std::st
     plyOptions.comments.push_back(comment.str());
     writePly(output, read.mesh, props, plyOptions);
     if (args.gigamesh) {
-        const auto paths = gigameshPaths(args, input, output, sel);
         GigaMeshMatInfo info;
         info.inputFile = fs::absolute(input).string();
         info.largestRadius = args.radius;
@@ -265,19 +261,19 @@ void computeOne(const ComputeArgs& args, const std::string& input, const std::st
         if (sel.volume) {
             info.invariant = GigaMeshInvariant::Volume;
             plyRows = toGigaMeshRows(inv.volume, GigaMeshInvariant::Volume);
-            writeGigaMeshMat(paths[k++], gigaMeshMatHeader(info), plyRows);
+            writeGigaMeshMat(gigameshFiles[k++], gigaMeshMatHeader(info), plyRows);
         }
         if (sel.patch) {
             info.invariant = GigaMeshInvariant::Patch;
             const GigaMeshRows rows = toGigaMeshRows(pl.patch, GigaMeshInvariant::Patch);
-            writeGigaMeshMat(paths[k++], gigaMeshMatHeader(info), rows);
+            writeGigaMeshMat(gigameshFiles[k++], gigaMeshMatHeader(info), rows);
             if (!sel.volume) plyRows = rows;
         }
         GigaMeshPlyOptions gmOptions;
         gmOptions.comments.push_back(std::string("msii ") + versionString() + ": feature_vector = " +
                                      (sel.volume ? "2 V/|B_r| - 1" : "P/(pi r^2)") +
                                      ", largest radius first; quality = largest element");
-        writeGigaMeshPly(paths[k], read.mesh, plyRows, gmOptions);
+        writeGigaMeshPly(gigameshFiles[k], read.mesh, plyRows, gmOptions);
     }
     const double writeSeconds = write.seconds();
 

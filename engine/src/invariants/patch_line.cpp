@@ -64,6 +64,7 @@ struct SampleSums {
 };
 
 struct Level {
+    int index = 0;  // l: cells of h0·2^l
     double h = 0;
     std::vector<std::uint64_t> key;
     std::vector<double> cx, cy, cz;       // centroids
@@ -193,10 +194,11 @@ std::vector<SampleSums> coarser(const std::vector<SampleSums>& fine)
     return out;
 }
 
-Level makeLevel(const std::vector<SampleSums>& sums, double h)
+Level makeLevel(const std::vector<SampleSums>& sums, double h0, int index)
 {
     Level level;
-    level.h = h;
+    level.index = index;
+    level.h = h0 * double(1 << index);
     const std::size_t n = sums.size();
     level.key.resize(n);
     level.cx.resize(n), level.cy.resize(n), level.cz.resize(n);
@@ -292,10 +294,27 @@ struct Gathered {
 
 /// The kernel of one level: weights per radius and histogram bin.
 struct LevelKernel {
-    double h = 0, bin = 0, reach = 0;
+    double bin = 0, reach = 0;
     int reachCells = 0, numBins = 0, numRadii = 0;
     std::vector<double> weightP, weightL;  // [k * numBins + b]
+    /// Per radius, the bins [first, last) where weightL is not zero (the kernel's support).
+    std::vector<std::pair<int, int>> lineBins;
 };
+
+/// Calls @p visit(s) for the samples of @p level in the 8³-cell blocks that overlap the
+/// level-l cells [lo, hi] (per axis, inclusive).
+template <class Visit>
+void forEachSampleInCells(const Level& level, const std::int64_t lo[3], const std::int64_t hi[3],
+                          Visit&& visit)
+{
+    for (std::int64_t bx = std::max<std::int64_t>(0, lo[0]) >> 3; bx <= hi[0] >> 3; ++bx)
+        for (std::int64_t by = std::max<std::int64_t>(0, lo[1]) >> 3; by <= hi[1] >> 3; ++by)
+            for (std::int64_t bz = std::max<std::int64_t>(0, lo[2]) >> 3; bz <= hi[2] >> 3; ++bz) {
+                const auto it = level.blocks.find(morton(std::uint64_t(bx), std::uint64_t(by), std::uint64_t(bz)));
+                if (it == level.blocks.end()) continue;
+                for (std::uint32_t s = it->second.first; s < it->second.second; ++s) visit(s);
+            }
+}
 
 /// Points in groups of 4³ cells of level l (Morton order), so that a group can share one
 /// gathered list of nearby samples: order[k] = (group key, point), groups
@@ -336,7 +355,7 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                     std::vector<float>& outP, std::vector<float>& outL, Progress* progress)
 {
     const std::size_t n = points.size();
-    const int l = int(std::lround(std::log2(level.h / h0)));
+    const int l = level.index;
     const double h = level.h;
     outP.assign(std::size_t(kernel.numRadii) * n, 0.0f);
     outL.assign(std::size_t(kernel.numRadii) * n, 0.0f);
@@ -359,19 +378,15 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
             const double ox = double(gx - (kOffset >> l)) * h, oy = double(gy - (kOffset >> l)) * h,
                          oz = double(gz - (kOffset >> l)) * h;
             near.clear();
-            for (std::int64_t bx = std::max<std::int64_t>(0, gx - reachCells) >> 3; bx <= (gx + 3 + reachCells) >> 3; ++bx)
-                for (std::int64_t by = std::max<std::int64_t>(0, gy - reachCells) >> 3; by <= (gy + 3 + reachCells) >> 3; ++by)
-                    for (std::int64_t bz = std::max<std::int64_t>(0, gz - reachCells) >> 3; bz <= (gz + 3 + reachCells) >> 3; ++bz) {
-                        const auto it = level.blocks.find(morton(std::uint64_t(bx), std::uint64_t(by), std::uint64_t(bz)));
-                        if (it == level.blocks.end()) continue;
-                        for (std::uint32_t s = it->second.first; s < it->second.second; ++s) {
-                            near.x.push_back(float(level.cx[s] - ox));
-                            near.y.push_back(float(level.cy[s] - oy));
-                            near.z.push_back(float(level.cz[s] - oz));
-                            near.a.push_back(level.area[s]);
-                            for (std::size_t c = 0; c < 6; ++c) near.t[c].push_back(level.tensor[c][s]);
-                        }
-                    }
+            const std::int64_t lo[3] = {gx - reachCells, gy - reachCells, gz - reachCells};
+            const std::int64_t hi[3] = {gx + 3 + reachCells, gy + 3 + reachCells, gz + 3 + reachCells};
+            forEachSampleInCells(level, lo, hi, [&](std::uint32_t s) {
+                near.x.push_back(float(level.cx[s] - ox));
+                near.y.push_back(float(level.cy[s] - oy));
+                near.z.push_back(float(level.cz[s] - oz));
+                near.a.push_back(level.area[s]);
+                for (std::size_t c = 0; c < 6; ++c) near.t[c].push_back(level.tensor[c][s]);
+            });
             const std::size_t ns = near.x.size();
             bins.resize(ns), frac.resize(ns), factor.resize(ns);
             for (std::size_t q = begin; q < end; ++q) {
@@ -396,10 +411,9 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                     double sumP = 0, sumL = 0;
                     const double* wp = kernel.weightP.data() + std::size_t(k) * numBins;
                     const double* wl = kernel.weightL.data() + std::size_t(k) * numBins;
-                    for (int b = 0; b < numBins; ++b) {
-                        sumP += double(hist[2 * std::size_t(b)]) * wp[b];
-                        sumL += double(hist[2 * std::size_t(b) + 1]) * wl[b];
-                    }
+                    for (int b = 0; b < numBins; ++b) sumP += double(hist[2 * std::size_t(b)]) * wp[b];
+                    const auto [first, last] = kernel.lineBins[std::size_t(k)];
+                    for (int b = first; b < last; ++b) sumL += double(hist[2 * std::size_t(b) + 1]) * wl[b];
                     outP[std::size_t(k) * n + i] = float(sumP);
                     outL[std::size_t(k) * n + i] = float(sumL);
                 }
@@ -420,9 +434,8 @@ void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec
                             int numFields, const std::vector<const float*>& values,
                             const std::vector<float*>& out)
 {
-    const int l = int(std::lround(std::log2(level.h / h0)));
     const double h = level.h, radius2 = 4.0 * h * h;
-    const CellGroups groups = groupByCells(p, h0, l);
+    const CellGroups groups = groupByCells(p, h0, level.index);
     const auto& order = groups.order;
     const auto& groupStart = groups.start;
 
@@ -435,13 +448,8 @@ void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec
             const std::int64_t gx = c0.x & ~std::int64_t(3), gy = c0.y & ~std::int64_t(3),
                                gz = c0.z & ~std::int64_t(3);
             near.clear();
-            for (std::int64_t bx = (gx - 3) >> 3; bx <= (gx + 6) >> 3; ++bx)
-                for (std::int64_t by = (gy - 3) >> 3; by <= (gy + 6) >> 3; ++by)
-                    for (std::int64_t bz = (gz - 3) >> 3; bz <= (gz + 6) >> 3; ++bz) {
-                        const auto it = level.blocks.find(morton(std::uint64_t(bx), std::uint64_t(by), std::uint64_t(bz)));
-                        if (it == level.blocks.end()) continue;
-                        for (std::uint32_t s = it->second.first; s < it->second.second; ++s) near.push_back(s);
-                    }
+            const std::int64_t lo[3] = {gx - 3, gy - 3, gz - 3}, hi[3] = {gx + 6, gy + 6, gz + 6};
+            forEachSampleInCells(level, lo, hi, [&](std::uint32_t s) { near.push_back(s); });
             for (std::size_t q = groupStart[g]; q < groupStart[g + 1]; ++q) {
                 const std::uint32_t i = order[q].second;
                 if (skip[i]) continue;
@@ -587,7 +595,7 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         result.numSamples = sums.size();
         for (int l = 0; l < numLevels; ++l) {
             if (l > 0) sums = coarser(sums);
-            levels.push_back(makeLevel(sums, h0 * double(1 << l)));
+            levels.push_back(makeLevel(sums, h0, l));
         }
     }
     result.samplingSeconds = stage.seconds();
@@ -604,14 +612,14 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         if (levelRadii.empty()) continue;
         const Level& level = levels[std::size_t(l)];
         LevelKernel kernel;
-        kernel.h = level.h;
         kernel.bin = level.h / kBinsPerCell;
         kernel.numRadii = int(levelRadii.size());
         // Kernel knot spacing per radius: kKernelCells cells, but at most r/2 so that the
         // kernel stays within d >= 0 (small radii on the finest level).
+        const double fullWidth = kernelCells(l) * level.h;
         std::vector<double> kw(levelRadii.size());
         for (std::size_t k = 0; k < kw.size(); ++k)
-            kw[k] = std::min(kernelCells(l) * level.h, 0.5 * radii[std::size_t(levelRadii[k])]);
+            kw[k] = std::min(fullWidth, 0.5 * radii[std::size_t(levelRadii[k])]);
         kernel.reach = radii[std::size_t(levelRadii.back())] + 2.0 * kw.back();
         kernel.reachCells = int(std::ceil(kernel.reach / level.h)) + 1;
         kernel.numBins = int(std::ceil(kernel.reach / kernel.bin)) + 2;
@@ -622,13 +630,17 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         kernel.weightL.resize(kernel.weightP.size());
         for (std::size_t k = 0; k < kw.size(); ++k) {
             const std::size_t j = std::size_t(levelRadii[k]);
+            std::pair<int, int> support{kernel.numBins, 0};
             for (int b = 0; b < kernel.numBins; ++b) {
                 const double d = (b + 0.5) * kernel.bin;
                 kernel.weightP[k * kernel.numBins + b] = bsplineIntegral((radii[j] - d) / kw[k]);
-                kernel.weightL[k * kernel.numBins + b] = bspline((d - radii[j]) / kw[k]) / kw[k];
+                const double wl = bspline((d - radii[j]) / kw[k]) / kw[k];
+                kernel.weightL[k * kernel.numBins + b] = wl;
+                if (wl != 0) support = {std::min(support.first, b), b + 1};
             }
+            kernel.lineBins.push_back(support.first < support.second ? support : std::pair{0, 0});
             variance[j] = kKernelVariance * kw[k] * kw[k] + kernel.bin * kernel.bin / 6.0;
-            fitted[j] = kw[k] == kernelCells(l) * level.h;
+            fitted[j] = kw[k] == fullWidth;  // not narrowed for a small radius
         }
 
         const auto masked = [&](std::size_t i, double r) {
@@ -643,12 +655,12 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
             if (options.computePatch) result.patch[j][i] = float(sumP / (M_PI * (r * r + variance[j])));
             if (options.computeLine) result.line[j][i] = float(sumL / (2.0 * M_PI * r));
         };
+        std::vector<char> skip(nv);  // every radius of the level is masked
+        for (std::size_t i = 0; i < nv; ++i) skip[i] = masked(i, radii[std::size_t(levelRadii.front())]);
         std::vector<float> sumP, sumL;
         const std::size_t numSamples = level.cx.size();
         if (numSamples >= nv) {
             // As many samples as vertices: evaluate at the vertices themselves.
-            std::vector<char> skip(nv);
-            for (std::size_t i = 0; i < nv; ++i) skip[i] = masked(i, radii[std::size_t(levelRadii.front())]);
             evaluatePoints(level, kernel, h0, mesh.points, skip, sumP, sumL, progress);
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& range) {
                 for (std::size_t i = range.begin(); i < range.end(); ++i)
@@ -665,8 +677,6 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
             evaluatePoints(level, kernel, h0, at, std::vector<char>(numSamples, 0), sumP, sumL, progress);
             if (vertexNormal.empty()) vertexNormal = areaWeightedNormals(mesh);
             const int nr = int(levelRadii.size());
-            std::vector<char> skip(nv);
-            for (std::size_t i = 0; i < nv; ++i) skip[i] = masked(i, radii[std::size_t(levelRadii.front())]);
             std::vector<float> atP(std::size_t(nr) * nv), atL(std::size_t(nr) * nv);
             std::vector<const float*> from;
             std::vector<float*> to;

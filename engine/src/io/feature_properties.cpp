@@ -12,6 +12,11 @@ std::array<std::pair<char, const FeatureColumns*>, 4> ordered(const Features& f)
 }
 } // namespace
 
+Features featuresOf(const VolumeSphereResult& vs, const PatchLineResult& pl)
+{
+    return {&vs.volume, &vs.sphere, &pl.patch, &pl.line};
+}
+
 std::string featureName(char letter, std::size_t j)
 {
     const std::string digits = std::to_string(j + 1);

@@ -6,6 +6,8 @@
 /// first invariant present in the order V, S, P, L (V_NN whenever V was computed). NaN marks
 /// a masked value.
 
+#include <msii/invariants/patch_line.h>
+#include <msii/invariants/volume_sphere.h>
 #include <msii/mesh/trimesh.h>
 
 #include <string>
@@ -22,6 +24,10 @@ struct Features {
     const FeatureColumns* patch = nullptr;   ///< P/(π r²)
     const FeatureColumns* line = nullptr;    ///< L/(2π r)
 };
+
+/// The features of a run: V and S from @p vs, P and L from @p pl (the results must outlive
+/// the returned pointers).
+Features featuresOf(const VolumeSphereResult& vs, const PatchLineResult& pl);
 
 /// Copies the features into properties, in the order of the file comment.
 std::vector<VertexProperty> featureProperties(const Features& features);
