@@ -299,6 +299,9 @@ struct LevelKernel {
     std::vector<double> weightP, weightL;  // [k * numBins + b]
     /// Per radius, the bins [first, last) where weightL is not zero (the kernel's support).
     std::vector<std::pair<int, int>> lineBins;
+    /// Per radius, the bins [first, last) where weightP is strictly between 0 and 1: it is
+    /// 1 below first (whole area inside), so P needs a running sum there and no weights.
+    std::vector<std::pair<int, int>> patchBins;
 };
 
 /// Calls @p visit(s) for the samples of @p level in the 8³-cell blocks that overlap the
@@ -365,6 +368,7 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
     const auto& cell = groups.cell;
 
     const int reachCells = kernel.reachCells, numBins = kernel.numBins, nr = kernel.numRadii;
+    const double groupSide = 4.0 * h, reach2 = kernel.reach * kernel.reach;
     if (progress) progress->start("P and L, level " + std::to_string(l), groupStart.size() - 1);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groupStart.size() - 1), [&](const auto& range) {
         Gathered near;
@@ -381,9 +385,15 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
             const std::int64_t lo[3] = {gx - reachCells, gy - reachCells, gz - reachCells};
             const std::int64_t hi[3] = {gx + 3 + reachCells, gy + 3 + reachCells, gz + 3 + reachCells};
             forEachSampleInCells(level, lo, hi, [&](std::uint32_t s) {
-                near.x.push_back(float(level.cx[s] - ox));
-                near.y.push_back(float(level.cy[s] - oy));
-                near.z.push_back(float(level.cz[s] - oz));
+                // Only samples within reach of the group's box [0, 4h)³ (the blocks bring
+                // about twice as many).
+                const double x = level.cx[s] - ox, y = level.cy[s] - oy, z = level.cz[s] - oz;
+                const double bx = std::max({0.0, -x, x - groupSide}), by = std::max({0.0, -y, y - groupSide}),
+                             bz = std::max({0.0, -z, z - groupSide});
+                if (bx * bx + by * by + bz * bz >= reach2) return;
+                near.x.push_back(float(x));
+                near.y.push_back(float(y));
+                near.z.push_back(float(z));
                 near.a.push_back(level.area[s]);
                 for (std::size_t c = 0; c < 6; ++c) near.t[c].push_back(level.tensor[c][s]);
             });
@@ -407,11 +417,16 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                     at[2] += a * w;        // bin b + 1
                     at[3] += ag * w;
                 }
+                double inside = 0;  // area of the bins below `counted`
+                int counted = 0;
                 for (int k = 0; k < nr; ++k) {
-                    double sumP = 0, sumL = 0;
                     const double* wp = kernel.weightP.data() + std::size_t(k) * numBins;
                     const double* wl = kernel.weightL.data() + std::size_t(k) * numBins;
-                    for (int b = 0; b < numBins; ++b) sumP += double(hist[2 * std::size_t(b)]) * wp[b];
+                    const auto [firstP, lastP] = kernel.patchBins[std::size_t(k)];
+                    if (firstP < counted) inside = 0, counted = 0;  // not expected: radii ascend
+                    for (; counted < firstP; ++counted) inside += double(hist[2 * std::size_t(counted)]);
+                    double sumP = inside, sumL = 0;
+                    for (int b = firstP; b < lastP; ++b) sumP += double(hist[2 * std::size_t(b)]) * wp[b];
                     const auto [first, last] = kernel.lineBins[std::size_t(k)];
                     for (int b = first; b < last; ++b) sumL += double(hist[2 * std::size_t(b) + 1]) * wl[b];
                     outP[std::size_t(k) * n + i] = float(sumP);
@@ -448,8 +463,17 @@ void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec
             const std::int64_t gx = c0.x & ~std::int64_t(3), gy = c0.y & ~std::int64_t(3),
                                gz = c0.z & ~std::int64_t(3);
             near.clear();
-            const std::int64_t lo[3] = {gx - 3, gy - 3, gz - 3}, hi[3] = {gx + 6, gy + 6, gz + 6};
-            forEachSampleInCells(level, lo, hi, [&](std::uint32_t s) { near.push_back(s); });
+            // Samples within 2h of the group's box: at most 2 cells beyond it.
+            const std::int64_t lo[3] = {gx - 2, gy - 2, gz - 2}, hi[3] = {gx + 5, gy + 5, gz + 5};
+            const double ox = double(gx - (kOffset >> level.index)) * h,
+                         oy = double(gy - (kOffset >> level.index)) * h,
+                         oz = double(gz - (kOffset >> level.index)) * h;
+            forEachSampleInCells(level, lo, hi, [&](std::uint32_t s) {
+                const double x = level.cx[s] - ox, y = level.cy[s] - oy, z = level.cz[s] - oz;
+                const double bx = std::max({0.0, -x, x - 4.0 * h}), by = std::max({0.0, -y, y - 4.0 * h}),
+                             bz = std::max({0.0, -z, z - 4.0 * h});
+                if (bx * bx + by * by + bz * bz < radius2) near.push_back(s);
+            });
             for (std::size_t q = groupStart[g]; q < groupStart[g + 1]; ++q) {
                 const std::uint32_t i = order[q].second;
                 if (skip[i]) continue;
@@ -631,14 +655,19 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         for (std::size_t k = 0; k < kw.size(); ++k) {
             const std::size_t j = std::size_t(levelRadii[k]);
             std::pair<int, int> support{kernel.numBins, 0};
+            int whole = 0, inside = 0;  // weightP is 1 on bins [0, whole), 0 from inside on
             for (int b = 0; b < kernel.numBins; ++b) {
                 const double d = (b + 0.5) * kernel.bin;
-                kernel.weightP[k * kernel.numBins + b] = bsplineIntegral((radii[j] - d) / kw[k]);
+                const double wp = bsplineIntegral((radii[j] - d) / kw[k]);
+                kernel.weightP[k * kernel.numBins + b] = wp;
+                if (wp == 1.0 && whole == b) whole = b + 1;
+                if (wp > 0) inside = b + 1;
                 const double wl = bspline((d - radii[j]) / kw[k]) / kw[k];
                 kernel.weightL[k * kernel.numBins + b] = wl;
                 if (wl != 0) support = {std::min(support.first, b), b + 1};
             }
             kernel.lineBins.push_back(support.first < support.second ? support : std::pair{0, 0});
+            kernel.patchBins.push_back({whole, std::max(whole, inside)});
             variance[j] = kKernelVariance * kw[k] * kw[k] + kernel.bin * kernel.bin / 6.0;
             fitted[j] = kw[k] == fullWidth;  // not narrowed for a small radius
         }
