@@ -13,7 +13,10 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
+#include <iomanip>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -73,13 +76,13 @@ std::string smallPatch()
     return path;
 }
 
-/// One clear line, non-zero exit, and no output left behind.
-void expectCleanFailure(const std::string& args, const std::string& mentions)
+/// One clear line, non-zero exit, and no output left behind (`msii <command> <args>`).
+void expectCleanFailureOf(const std::string& command, const std::string& args, const std::string& mentions)
 {
-    SCOPED_TRACE(args);
+    SCOPED_TRACE(command + " " + args);
     const fs::path out = tempDir() / "bad_out.ply";
     fs::remove(out);
-    const RunResult r = runMsii("compute " + args + " --output '" + out.string() + "'");
+    const RunResult r = runMsii(command + " " + args + " --output '" + out.string() + "'");
     EXPECT_NE(r.code, 0);
     EXPECT_EQ(r.err.rfind("msii: error: ", 0), 0u) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
@@ -87,6 +90,27 @@ void expectCleanFailure(const std::string& args, const std::string& mentions)
     EXPECT_FALSE(fs::exists(out));
     for (const auto& entry : fs::directory_iterator(tempDir()))
         EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
+}
+
+void expectCleanFailure(const std::string& args, const std::string& mentions)
+{
+    expectCleanFailureOf("compute", args, mentions);
+}
+
+/// Bit for bit (NaN equals NaN).
+bool sameFloats(const std::vector<float>& a, const std::vector<float>& b)
+{
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+/// The vertex properties of a PLY, by name.
+std::map<std::string, std::vector<float>> propertiesOf(const fs::path& ply)
+{
+    ReadMeshOptions ro;
+    ro.keepVertexProperties = true;
+    std::map<std::string, std::vector<float>> out;
+    for (auto& p : readMesh(ply.string(), ro).vertexProperties) out[p.name] = std::move(p.values);
+    return out;
 }
 
 } // namespace
@@ -216,4 +240,115 @@ TEST(MsiiCli, ExactModeSelectionAndGigaMeshFiles)
         if (std::isnan(v)) EXPECT_TRUE(std::isnan(values[k]));
         else EXPECT_NEAR(values[k], 2.0 * v - 1.0, 1e-6);
     }
+}
+
+// metric and smooth after compute, as a user chains them: f as the formulas give it from the
+// file's own features, references by vertex and by vector agree, GigaMesh .mat input gives
+// the same f, smoothing changes what it is asked to and nothing else.
+TEST(MsiiCli, MetricAndSmoothAfterCompute)
+{
+    const fs::path dir = tempDir() / "metric";
+    fs::create_directories(dir);
+    const fs::path features = dir / "patch.msii.ply";
+    const RunResult rc = runMsii("compute '" + smallPatch() + "' --radius 0.8 --scales 4 --invariants V,P "
+                                 "--gigamesh --quiet --output '" + features.string() + "'");
+    ASSERT_EQ(rc.code, 0) << rc.err;
+    const auto in = propertiesOf(features);
+    const std::size_t nv = in.at("V_01").size();
+
+    const fs::path m = dir / "m.ply";
+    const RunResult rm = runMsii("metric '" + features.string() + "' --invariants V --metric l2,mahalanobis,l1w "
+                                 "--quiet --output '" + m.string() + "'");
+    ASSERT_EQ(rm.code, 0) << rm.err;
+    EXPECT_TRUE(rm.err.empty()) << rm.err;
+    auto out = propertiesOf(m);
+    for (const auto& [name, values] : in)
+        if (name != "quality") EXPECT_TRUE(sameFloats(out.at(name), values)) << name << " kept as it was";
+    ASSERT_TRUE(out.count("f_l2") && out.count("f_mahalanobis") && out.count("f_l1w"));
+    EXPECT_TRUE(sameFloats(out.at("quality"), out.at("f_l2")));
+    std::size_t checked = 0, masked = 0;
+    for (std::size_t i = 0; i < nv; ++i) {
+        double l2 = 0, l1w = 0;
+        for (int j = 1; j <= 4; ++j) {
+            const double d = in.at("V_0" + std::to_string(j))[i] - 0.5;  // flat: V/|B| = 1/2
+            l2 += d * d;
+            l1w += (3.0 * j * j - 3.0 * j + 1.0) / 64.0 * std::abs(d);  // Eq. 6, n = 4
+        }
+        if (std::isnan(l2)) {
+            EXPECT_TRUE(std::isnan(out.at("f_l2")[i]));
+            ++masked;
+            continue;
+        }
+        EXPECT_NEAR(out.at("f_l2")[i], std::sqrt(l2), 1e-6);
+        EXPECT_NEAR(out.at("f_l1w")[i], l1w, 1e-6);
+        ++checked;
+    }
+    EXPECT_GT(checked, 100u);
+    EXPECT_GT(masked, 0u);
+
+    // Reference by vertex == reference by its vector (printed to 9 digits: float exact).
+    std::size_t ref = 0;
+    while (std::isnan(in.at("V_01")[ref]) || std::isnan(in.at("V_04")[ref])) ++ref;
+    std::ostringstream vec;
+    vec << std::setprecision(9);
+    for (int j = 1; j <= 4; ++j) vec << (j > 1 ? "," : "") << in.at("V_0" + std::to_string(j))[ref];
+    const fs::path byVertex = dir / "byvertex.ply", byVector = dir / "byvector.ply";
+    ASSERT_EQ(runMsii("metric '" + features.string() + "' --metric cosine --reference vertex:" +
+                      std::to_string(ref) + " --quiet -o '" + byVertex.string() + "'").code, 0);
+    ASSERT_EQ(runMsii("metric '" + features.string() + "' --metric cosine --reference vector:" + vec.str() +
+                      " --quiet -o '" + byVector.string() + "'").code, 0);
+    const auto a = propertiesOf(byVertex).at("quality"), b = propertiesOf(byVector).at("quality");
+    EXPECT_NEAR(a[ref], 1.0, 1e-6);  // a vector is parallel to itself
+    for (std::size_t i = 0; i < nv; ++i)
+        if (!std::isnan(a[i])) EXPECT_NEAR(a[i], b[i], 1e-6);
+
+    // The GigaMesh .mat of the same run on the bare mesh gives the same f.
+    const fs::path fromMat = dir / "frommat.ply";
+    const RunResult rg = runMsii("metric '" + smallPatch() + "' --mat '" + (dir / "patch_r0.80_n2_v6.volume.mat").string() +
+                                 "' --metric l2 --quiet -o '" + fromMat.string() + "'");
+    ASSERT_EQ(rg.code, 0) << rg.err;
+    const auto g = propertiesOf(fromMat).at("quality");
+    for (std::size_t i = 0; i < nv; ++i)
+        if (!std::isnan(out.at("f_l2")[i])) EXPECT_NEAR(g[i], out.at("f_l2")[i], 1e-6);
+
+    // smooth: quality changes, the rest stays; --all-features smooths V and P as well.
+    const fs::path s1 = dir / "s1.ply", s2 = dir / "s2.ply";
+    const RunResult rs = runMsii("smooth '" + m.string() + "' --filter median -k 3 --quiet -o '" + s1.string() + "'");
+    ASSERT_EQ(rs.code, 0) << rs.err;
+    const auto smoothed = propertiesOf(s1);
+    EXPECT_FALSE(sameFloats(smoothed.at("quality"), out.at("quality")));
+    EXPECT_TRUE(sameFloats(smoothed.at("V_02"), out.at("V_02")));
+    EXPECT_TRUE(sameFloats(smoothed.at("f_mahalanobis"), out.at("f_mahalanobis")));
+    ASSERT_EQ(runMsii("smooth '" + m.string() + "' --all-features --delta ring -k 2 --quiet -o '" + s2.string() + "'").code, 0);
+    const auto all = propertiesOf(s2);
+    EXPECT_FALSE(sameFloats(all.at("V_02"), out.at("V_02")));
+    EXPECT_FALSE(sameFloats(all.at("P_04"), out.at("P_04")));
+    EXPECT_TRUE(sameFloats(all.at("f_l1w"), out.at("f_l1w")));
+}
+
+TEST(MsiiCli, MetricAndSmoothBadInputFailCleanly)
+{
+    const fs::path features = tempDir() / "bad_features.msii.ply";
+    ASSERT_EQ(runMsii("compute '" + smallPatch() + "' --radius 0.8 --scales 4 --invariants V,P --quiet "
+                      "--output '" + features.string() + "'").code, 0);
+    const std::string f = "'" + features.string() + "'";
+    expectCleanFailureOf("metric", f + " --metric l7", "unknown metric 'l7'");
+    expectCleanFailureOf("metric", f + " --invariants V,Q", "unknown invariant 'Q'");
+    expectCleanFailureOf("metric", f + " --invariants S", "no S features");
+    expectCleanFailureOf("metric", "'" + smallPatch() + "'", "no V features");
+    expectCleanFailureOf("metric", f + " --reference vertex:99999999", "the mesh has");
+    expectCleanFailureOf("metric", f + " --reference vertex:x", "not a vertex index");
+    expectCleanFailureOf("metric", f + " --reference vector:1,2", "has 2 values");
+    expectCleanFailureOf("metric", f + " --reference sideways", "--reference 'sideways'");
+    expectCleanFailureOf("metric", f + " --metric lp --p 0", "--p must be a positive number");
+    expectCleanFailureOf("metric", f + " --metric lp --p -1", "--p must be a positive number");
+    expectCleanFailureOf("metric", f + " --metric cosine", "flat");
+    expectCleanFailureOf("metric", f + " --mat '" + writeText("x.volume.mat", "0 1 2\n") + "'", "x.volume.mat");
+    expectCleanFailureOf("metric", f + " --mat '" + writeText("x.txt", "0 1\n") + "'", "not named like");
+    expectCleanFailureOf("metric", "'" + (tempDir() / "missing.ply").string() + "'", "cannot open");
+    expectCleanFailureOf("smooth", f + " --iterations -1", "--iterations must be 0 or more");
+    expectCleanFailureOf("smooth", f + " --filter gauss", "unknown --filter 'gauss'");
+    expectCleanFailureOf("smooth", f + " --delta tiny", "unknown --delta");
+    expectCleanFailureOf("smooth", f + " --properties height", "no vertex property 'height'");
+    expectCleanFailureOf("smooth", "'" + smallPatch() + "' --all-features", "no features");
 }

@@ -7,6 +7,9 @@
 #include <msii/core/stopwatch.h>
 #include <msii/invariants/compute.h>
 #include <msii/io/feature_properties.h>
+#include <msii/io/feature_table.h>
+#include <msii/metrics/feature_metrics.h>
+#include <msii/smoothing/ring_smoothing.h>
 #include <msii/io/write_ply.h>
 #include <msii/mesh/read_mesh.h>
 #include <msii/samples/generators.h>
@@ -16,7 +19,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <limits>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -74,6 +79,7 @@ int main(int argc, char** argv)
     std::vector<double> read, check, ls, occ, st, interp, samp, pl, compute, write, total;
     const auto has = [&](char c) { return invariants.find(c) != std::string::npos; };
     ComputeResult last;
+    TriMesh lastMesh;
     std::size_t nv = 0;
     for (int run = 0; run < runs; ++run) {
         const Stopwatch wall;
@@ -102,8 +108,63 @@ int main(int argc, char** argv)
         samp.push_back(last.timings.samples);
         pl.push_back(last.timings.patchLine);
         compute.push_back(last.timings.total);
+        if (run + 1 == runs) lastMesh = std::move(mesh);
     }
     fs::remove_all(dir);
+
+    // After compute: every metric over all computed features (4 × N with V,S,P,L) against a
+    // vertex's vector, and 30 passes of each 1-ring filter on quality (issue 4's stages).
+    const std::vector<VertexProperty> props = featureProperties(featuresOf(last.invariants, last.patchLine));
+    std::vector<Invariant> all;
+    for (const auto& [c, inv] : {std::pair{'V', Invariant::Volume}, std::pair{'S', Invariant::Sphere},
+                                 std::pair{'P', Invariant::Patch}, std::pair{'L', Invariant::Line}})
+        if (has(c)) all.push_back(inv);
+    const FeatureTable table = featureTableOf(props, nv, all);
+    std::size_t refVertex = nv / 2;  // a vertex with no masked element, near the middle
+    for (std::size_t i = nv / 2; i < nv; ++i) {
+        const float* row = table.values.data() + i * table.dimension();
+        if (std::none_of(row, row + table.dimension(), [](float v) { return std::isnan(v); })) {
+            refVertex = i;
+            break;
+        }
+    }
+    const std::vector<double> reference = vertexReference(table, refVertex);
+    struct MetricRow {
+        std::string name;
+        MetricOptions options;
+        std::vector<double> seconds;
+    };
+    const double inf = std::numeric_limits<double>::infinity();
+    std::vector<MetricRow> metricRows{
+        {"l1", {MetricKind::PNorm, 1, false}, {}},   {"l2w", {MetricKind::PNorm, 2, true}, {}},
+        {"linfw", {MetricKind::PNorm, inf, true}, {}}, {"lp (p = 3)", {MetricKind::PNorm, 3, false}, {}},
+        {"mahalanobis", {MetricKind::Mahalanobis, 2, false}, {}}, {"cosine", {MetricKind::Cosine, 2, false}, {}},
+        {"correlation", {MetricKind::Correlation, 2, false}, {}},
+        {"autocorrelation", {MetricKind::AutoCorrelation, 2, false}, {}},
+        {"tanimoto", {MetricKind::Tanimoto, 2, false}, {}},
+        {"neuclid", {MetricKind::NormalizedEuclidean, 2, false}, {}}};
+    std::vector<double> ringSetupMean, ringMean, ringSetupMedian, ringMedian;
+    std::vector<float> quality = props.back().values;
+    for (int run = 0; run < runs; ++run) {
+        for (MetricRow& m : metricRows) {
+            const Stopwatch t;
+            const MetricResult r = computeMetric(table, reference, m.options);
+            m.seconds.push_back(t.seconds());
+        }
+        for (const SmoothingFilter filter : {SmoothingFilter::Mean, SmoothingFilter::Median}) {
+            SmoothingOptions so;
+            so.filter = filter;
+            so.iterations = 30;
+            std::vector<float> values = quality;
+            const Stopwatch setup;
+            const RingSmoother smoother(lastMesh, so);
+            const double setupSeconds = setup.seconds();
+            const Stopwatch passes;
+            smoother.smooth(values);
+            (filter == SmoothingFilter::Mean ? ringSetupMean : ringSetupMedian).push_back(setupSeconds);
+            (filter == SmoothingFilter::Mean ? ringMean : ringMedian).push_back(passes.seconds());
+        }
+    }
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
     std::printf("msii-benchmark: tablet %.1f x %.1f mm, spacing %.3f mm, %zu vertices, R = %g, N = %d, "
@@ -130,6 +191,13 @@ int main(int argc, char** argv)
     row("write result PLY", median(write), "%8.2f");
     row("**total wall, read to write**", median(total), "%8.2f");
     row("vertices per second", nv / median(total), "%8.0f");
+    const std::string features = std::to_string(table.dimension()) + " features";
+    for (const MetricRow& m : metricRows)
+        row(("metric " + m.name + ", " + features).c_str(), median(m.seconds), "%8.2f");
+    row("1-ring set-up (mean)", median(ringSetupMean), "%8.2f");
+    row("1-ring mean, 30 passes", median(ringMean), "%8.2f");
+    row("1-ring set-up (median)", median(ringSetupMedian), "%8.2f");
+    row("1-ring median, 30 passes", median(ringMedian), "%8.2f");
     row("peak memory (MB)", usage.ru_maxrss / 1024.0, "%8.0f");
     return 0;
 }

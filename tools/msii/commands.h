@@ -8,5 +8,9 @@ namespace msii::tools {
 
 /// Adds `msii compute`; the returned function runs it (after parsing) and returns the exit code.
 std::function<int()> addComputeCommand(CLI::App& app);
+/// Adds `msii metric` (metrics of feature vectors, paper Sec. 3.1).
+std::function<int()> addMetricCommand(CLI::App& app);
+/// Adds `msii smooth` (fast 1-ring smoothing, paper Sec. 3.2).
+std::function<int()> addSmoothCommand(CLI::App& app);
 
 } // namespace msii::tools

@@ -10,11 +10,14 @@
 
 int main(int argc, char** argv)
 {
-    CLI::App app{"msii: Multi-Scale Integral Invariants (volume, sphere area) per vertex of "
-                 "triangle meshes: 3D scans of tablets, seals, inscriptions and terrain."};
+    CLI::App app{"msii: Multi-Scale Integral Invariants (volume, sphere area, patch area, line "
+                 "length) per vertex of triangle meshes: 3D scans of tablets, seals, inscriptions "
+                 "and terrain; metrics of the feature vectors and 1-ring smoothing."};
     app.set_version_flag("--version", std::string("msii ") + msii::versionString());
     app.require_subcommand(1);
     auto runCompute = msii::tools::addComputeCommand(app);
+    auto runMetric = msii::tools::addMetricCommand(app);
+    auto runSmooth = msii::tools::addSmoothCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::Success& e) {  // --help, --help-all, --version
@@ -25,6 +28,8 @@ int main(int argc, char** argv)
     }
     try {
         if (app.got_subcommand("compute")) return runCompute();
+        if (app.got_subcommand("metric")) return runMetric();
+        if (app.got_subcommand("smooth")) return runSmooth();
     } catch (const std::bad_alloc&) {
         std::cerr << "msii: error: out of memory (try a larger --voxel-size)\n";
         return 1;

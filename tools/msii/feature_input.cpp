@@ -1,0 +1,61 @@
+#include "feature_input.h"
+
+#include <msii/core/errors.h>
+#include <msii/io/atomic_file.h>
+#include <msii/io/feature_table.h>
+#include <msii/mesh/read_mesh.h>
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+
+namespace fs = std::filesystem;
+
+namespace msii::tools {
+
+namespace {
+/// "V_07": a feature of invariant @p letter.
+bool isFeatureOf(const std::string& name, char letter)
+{
+    return name.size() >= 4 && name[0] == letter && name[1] == '_' &&
+           std::all_of(name.begin() + 2, name.end(), [](unsigned char c) { return std::isdigit(c); });
+}
+} // namespace
+
+FeatureMesh readFeatureMesh(const std::string& input, const std::vector<std::string>& matFiles)
+{
+    ReadMeshOptions options;
+    options.keepVertexProperties = true;
+    ReadMeshResult read = readMesh(input, options);
+    FeatureMesh out;
+    out.mesh = std::move(read.mesh);
+    out.properties = std::move(read.vertexProperties);
+    for (const std::string& mat : matFiles) {
+        std::vector<VertexProperty> add = featurePropertiesFromMat(mat, out.mesh.numVertices());
+        const char letter = add.front().name[0];
+        // A .mat replaces the whole feature vector of its invariant, whatever its length.
+        out.properties.erase(std::remove_if(out.properties.begin(), out.properties.end(),
+                                            [&](const VertexProperty& p) { return isFeatureOf(p.name, letter); }),
+                             out.properties.end());
+        mergeProperties(out.properties, std::move(add));
+    }
+    return out;
+}
+
+std::string outputPath(const std::string& input, const std::string& output, const std::string& suffix,
+                       bool overwrite)
+{
+    std::string path = output;
+    if (path.empty()) {
+        const fs::path in(input);
+        path = (in.parent_path() / (in.stem().string() + "." + suffix + ".ply")).string();
+    }
+    if (fs::path(path).extension() != ".ply")
+        throw InvalidInputError("the output '" + path + "' must be a .ply file");
+    if (!overwrite && fs::exists(path))
+        throw IOError("'" + path + "' exists already (use --overwrite to replace it)");
+    checkWritable(path);
+    return path;
+}
+
+} // namespace msii::tools

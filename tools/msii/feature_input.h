@@ -1,0 +1,25 @@
+#pragma once
+// What `msii metric` and `msii smooth` share: reading a feature PLY (and GigaMesh .mat
+// files) with all its vertex properties, and writing the result next to it.
+#include <msii/mesh/trimesh.h>
+
+#include <string>
+#include <vector>
+
+namespace msii::tools {
+
+struct FeatureMesh {
+    TriMesh mesh;
+    std::vector<VertexProperty> properties;  ///< every scalar vertex property of the input
+    std::vector<std::string> comments;       ///< for the output header
+};
+
+/// Reads @p input (any mesh format; PLY keeps its vertex properties) and replaces its V or P
+/// features by those of each GigaMesh `.mat` file in @p matFiles.
+FeatureMesh readFeatureMesh(const std::string& input, const std::vector<std::string>& matFiles);
+
+/// --output, else <input folder>/<input stem>.<suffix>.ply; checks that it may be written.
+std::string outputPath(const std::string& input, const std::string& output, const std::string& suffix,
+                       bool overwrite);
+
+} // namespace msii::tools

@@ -1,0 +1,163 @@
+/// `msii smooth INPUT.ply [--filter mean|median] [--iterations 30]`: fast 1-ring smoothing
+/// (paper §3.2) of `quality`, of chosen properties, or of every feature element.
+#include "commands.h"
+#include "feature_input.h"
+
+#include <msii/core/errors.h>
+#include <msii/core/progress.h>
+#include <msii/core/stopwatch.h>
+#include <msii/core/version.h>
+#include <msii/io/write_ply.h>
+#include <msii/smoothing/ring_smoothing.h>
+
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <memory>
+#include <sstream>
+
+namespace msii::tools {
+
+namespace {
+
+struct SmoothArgs {
+    std::string input, output;
+    std::vector<std::string> matFiles;
+    std::string filter = "mean";
+    int iterations = 30;
+    std::string delta = "global";
+    std::string weights = "balanced";
+    std::string border = "ring";
+    std::string properties = "quality";
+    bool allFeatures = false;
+    int threads = 0;
+    bool quiet = false, overwrite = false;
+};
+
+SmoothingOptions smoothingOptions(const SmoothArgs& args)
+{
+    SmoothingOptions o;
+    if (args.iterations < 0)
+        throw InvalidInputError("--iterations must be 0 or more, not " + std::to_string(args.iterations));
+    o.iterations = args.iterations;
+    if (args.filter == "mean") o.filter = SmoothingFilter::Mean;
+    else if (args.filter == "median") o.filter = SmoothingFilter::Median;
+    else throw InvalidInputError("unknown --filter '" + args.filter + "' (use mean or median)");
+    if (args.delta == "global") o.radius = RingRadius::Global;
+    else if (args.delta == "ring") o.radius = RingRadius::Ring;
+    else throw InvalidInputError("unknown --delta '" + args.delta + "' (use global or ring)");
+    if (args.weights == "balanced") o.weights = RingWeights::Balanced;
+    else if (args.weights == "area") o.weights = RingWeights::IsoscelesArea;
+    else throw InvalidInputError("unknown --weights '" + args.weights + "' (use balanced or area)");
+    if (args.border == "ring") o.border = BorderMode::OpenRing;
+    else if (args.border == "keep") o.border = BorderMode::Keep;
+    else throw InvalidInputError("unknown --border '" + args.border + "' (use ring or keep)");
+    return o;
+}
+
+bool isFeatureName(const std::string& name)
+{
+    return name.size() >= 4 && std::string("VSPL").find(name[0]) != std::string::npos && name[1] == '_' &&
+           std::all_of(name.begin() + 2, name.end(), [](unsigned char c) { return std::isdigit(c); });
+}
+
+int runSmooth(const SmoothArgs& args)
+{
+    const Stopwatch total;
+    const SmoothingOptions options = smoothingOptions(args);
+    const std::string output = outputPath(args.input, args.output, "smooth", args.overwrite);
+    FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
+
+    // Which properties: --all-features (every V_/S_/P_/L_ element and quality), else the list.
+    std::vector<std::size_t> chosen;
+    if (args.allFeatures) {
+        for (std::size_t k = 0; k < in.properties.size(); ++k)
+            if (isFeatureName(in.properties[k].name) || in.properties[k].name == "quality") chosen.push_back(k);
+        if (chosen.empty()) throw InvalidInputError("the input has no features (V_01 ...) and no quality to smooth");
+    } else {
+        std::stringstream list(args.properties);
+        std::string name;
+        while (std::getline(list, name, ',')) {
+            if (name.empty()) continue;
+            const auto it = std::find_if(in.properties.begin(), in.properties.end(),
+                                         [&](const VertexProperty& p) { return p.name == name; });
+            if (it == in.properties.end()) {
+                std::string present;
+                for (const auto& p : in.properties) present += (present.empty() ? "" : " ") + p.name;
+                throw InvalidInputError("the input has no vertex property '" + name + "' (it has: " +
+                                        (present.empty() ? std::string("none") : present) + ")");
+            }
+            chosen.push_back(std::size_t(it - in.properties.begin()));
+        }
+        if (chosen.empty()) throw InvalidInputError("--properties names no property");
+    }
+
+    RingSmoother smoother(in.mesh, options);
+    const SmoothingInfo& info = smoother.info();
+    if (!args.quiet && options.radius == RingRadius::Global && info.globalDeltaTooSmall && options.iterations > 0)
+        std::fprintf(stderr,
+                     "msii: warning: the shortest edge (%.3g) is below a tenth of the median edge "
+                     "(%.3g), so with --delta global (the paper's choice) the filter hardly changes "
+                     "anything; --delta ring uses each ring's own shortest edge\n",
+                     info.globalDelta, info.medianEdge);
+    Progress progress(!args.quiet && Progress::stderrIsTerminal());
+    for (std::size_t k : chosen) smoother.smooth(in.properties[k].values, &progress);
+
+    WritePlyOptions plyOptions;
+    std::ostringstream comment;
+    comment << "msii " << versionString() << " smooth --filter " << args.filter << " --iterations "
+            << args.iterations << " --delta " << args.delta << " (delta " << info.globalDelta
+            << ") --weights " << args.weights << " --border " << args.border;
+    plyOptions.comments.push_back(comment.str());
+    writePly(output, in.mesh, in.properties, plyOptions);
+    if (!args.quiet)
+        std::fprintf(stderr, "msii: %s -> %s (%zu vertices, %zu properties, %d x %s, %.1f s)\n",
+                     args.input.c_str(), output.c_str(), in.mesh.numVertices(), chosen.size(),
+                     args.iterations, args.filter.c_str(), total.seconds());
+    return 0;
+}
+
+} // namespace
+
+std::function<int()> addSmoothCommand(CLI::App& app)
+{
+    auto args = std::make_shared<SmoothArgs>();
+    CLI::App* cmd = app.add_subcommand(
+        "smooth", "Fast 1-ring mean or median smoothing (paper Sec. 3.2), repeated k times, of "
+                  "quality (default), chosen properties or every feature element; writes a PLY "
+                  "with every property of the input.");
+    cmd->add_option("input", args->input, "PLY with per-vertex values (e.g. from msii metric or compute)")
+        ->required();
+    cmd->add_option("-o,--output", args->output, "Output PLY (default <input stem>.smooth.ply)");
+    cmd->add_option("--mat", args->matFiles,
+                    "GigaMesh feature file(s) for the input mesh (*.volume.mat, *.surface.mat)");
+    cmd->add_option("--filter", args->filter, "mean (Eq. 16, default) or median (Eq. 17)");
+    cmd->add_option("-k,--iterations", args->iterations, "Passes (default 30, as in the paper)");
+    cmd->add_option("--delta", args->delta,
+                    "Disc radius: global (the mesh's shortest edge, the paper's choice, default) or "
+                    "ring (each ring's shortest edge, Eq. 12: robust to near-zero edges of scans)");
+    cmd->add_option("--weights", args->weights,
+                    "Triangle weights: balanced (tan of half the angle at the vertex: keeps linear "
+                    "functions, default) or area (Eq. 15)");
+    cmd->add_option("--border", args->border,
+                    "Border vertices: ring (smoothed over the triangles they have, default) or keep");
+    cmd->add_option("--properties", args->properties,
+                    "Vertex properties to smooth, comma-separated (default quality)");
+    cmd->add_flag("--all-features", args->allFeatures,
+                  "Smooth every feature element (V_01 ..., S_, P_, L_) and quality");
+    cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
+    cmd->add_flag("-q,--quiet", args->quiet, "No progress, no summary; errors only");
+    cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output");
+    return [args]() {
+        if (args->threads < 0) throw InvalidInputError("--threads must be 0 (all cores) or more");
+        std::unique_ptr<tbb::global_control> limit;
+        if (args->threads > 0)
+            limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                          std::size_t(args->threads));
+        return runSmooth(*args);
+    };
+}
+
+} // namespace msii::tools
