@@ -263,7 +263,9 @@ TEST(MsiiCli, MetricAndSmoothAfterCompute)
     EXPECT_TRUE(rm.err.empty()) << rm.err;
     auto out = propertiesOf(m);
     for (const auto& [name, values] : in)
-        if (name != "quality") EXPECT_TRUE(sameFloats(out.at(name), values)) << name << " kept as it was";
+        if (name != "quality") {
+            EXPECT_TRUE(sameFloats(out.at(name), values)) << name << " kept as it was";
+        }
     ASSERT_TRUE(out.count("f_l2") && out.count("f_mahalanobis") && out.count("f_l1w"));
     EXPECT_TRUE(sameFloats(out.at("quality"), out.at("f_l2")));
     std::size_t checked = 0, masked = 0;
@@ -300,7 +302,9 @@ TEST(MsiiCli, MetricAndSmoothAfterCompute)
     const auto a = propertiesOf(byVertex).at("quality"), b = propertiesOf(byVector).at("quality");
     EXPECT_NEAR(a[ref], 1.0, 1e-6);  // a vector is parallel to itself
     for (std::size_t i = 0; i < nv; ++i)
-        if (!std::isnan(a[i])) EXPECT_NEAR(a[i], b[i], 1e-6);
+        if (!std::isnan(a[i])) {
+            EXPECT_NEAR(a[i], b[i], 1e-6);
+        }
 
     // The GigaMesh .mat of the same run on the bare mesh gives the same f.
     const fs::path fromMat = dir / "frommat.ply";
@@ -309,7 +313,9 @@ TEST(MsiiCli, MetricAndSmoothAfterCompute)
     ASSERT_EQ(rg.code, 0) << rg.err;
     const auto g = propertiesOf(fromMat).at("quality");
     for (std::size_t i = 0; i < nv; ++i)
-        if (!std::isnan(out.at("f_l2")[i])) EXPECT_NEAR(g[i], out.at("f_l2")[i], 1e-6);
+        if (!std::isnan(out.at("f_l2")[i])) {
+            EXPECT_NEAR(g[i], out.at("f_l2")[i], 1e-6);
+        }
 
     // smooth: quality changes, the rest stays; --all-features smooths V and P as well.
     const fs::path s1 = dir / "s1.ply", s2 = dir / "s2.ply";
