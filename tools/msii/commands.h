@@ -3,8 +3,15 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <memory>
+
+#include <tbb/global_control.h>
 
 namespace msii::tools {
+
+/// --threads N: 0 = all cores (null), else a TBB limit held for the returned object's life.
+/// @throw InvalidInputError if N < 0.
+std::unique_ptr<tbb::global_control> limitThreads(int threads);
 
 /// Adds `msii compute`; the returned function runs it (after parsing) and returns the exit code.
 std::function<int()> addComputeCommand(CLI::App& app);

@@ -341,6 +341,14 @@ void computeOne(const ComputeArgs& args, const std::string& input, const std::st
 
 } // namespace
 
+std::unique_ptr<tbb::global_control> limitThreads(int threads)
+{
+    if (threads < 0) throw InvalidInputError("--threads must be 0 (all cores) or more");
+    if (threads == 0) return nullptr;
+    return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                 std::size_t(threads));
+}
+
 std::function<int()> addComputeCommand(CLI::App& app)
 {
     auto args = std::make_shared<ComputeArgs>();
@@ -390,11 +398,7 @@ std::function<int()> addComputeCommand(CLI::App& app)
         }
         if (!args->output.empty() && args->inputs.size() > 1)
             throw InvalidInputError("--output takes one input; use --output-dir for several");
-        if (args->threads < 0) throw InvalidInputError("--threads must be 0 (all cores) or more");
-        std::unique_ptr<tbb::global_control> limit;
-        if (args->threads > 0)
-            limit = std::make_unique<tbb::global_control>(
-                tbb::global_control::max_allowed_parallelism, std::size_t(args->threads));
+        const auto limit = limitThreads(args->threads);
         int failures = 0;
         for (const auto& input : args->inputs) {
             try {

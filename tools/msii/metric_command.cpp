@@ -10,8 +10,6 @@
 #include <msii/io/write_ply.h>
 #include <msii/metrics/feature_metrics.h>
 
-#include <tbb/global_control.h>
-
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -218,11 +216,7 @@ std::function<int()> addMetricCommand(CLI::App& app)
     cmd->add_flag("-q,--quiet", args->quiet, "No summary; errors only");
     cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output");
     return [args]() {
-        if (args->threads < 0) throw InvalidInputError("--threads must be 0 (all cores) or more");
-        std::unique_ptr<tbb::global_control> limit;
-        if (args->threads > 0)
-            limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                          std::size_t(args->threads));
+        const auto limit = limitThreads(args->threads);
         return runMetric(*args);
     };
 }

@@ -283,15 +283,17 @@ std::vector<double> centredReference(const FeatureTable& table, const std::vecto
     return c;
 }
 
-/// x̃·õ / (|x̃| |õ|) on values centred on the flat surface; NaN for a flat vertex (x̃ = 0).
-std::vector<float> cosine(const FeatureTable& table, const std::vector<double>& o)
+/// A similarity of centred values (x̃ = x − flat, õ = o − flat) from x̃·õ, |x̃|² and |õ|²:
+/// @p combine(xo, xx, oo) per vertex.
+template <class Combine>
+std::vector<float> centredSimilarity(const FeatureTable& table, const std::vector<double>& o,
+                                     const char* metric, Combine combine)
 {
     const std::size_t dim = table.dimension();
     const std::vector<double> flat = flatReference(table);
-    const std::vector<double> oc = centredReference(table, o, "the cosine similarity");
+    const std::vector<double> oc = centredReference(table, o, metric);
     double oo = 0;
     for (double v : oc) oo += v * v;
-    const double normO = std::sqrt(oo);
     const double* fp = flat.data();
     const double* cp = oc.data();
     return forEachVertex(table, [=](const float* x) {
@@ -301,27 +303,22 @@ std::vector<float> cosine(const FeatureTable& table, const std::vector<double>& 
             xo += xc * cp[e];
             xx += xc * xc;
         }
-        return xx > 0 ? xo / (std::sqrt(xx) * normO) : kNaN;  // a flat vertex has no direction
+        return combine(xo, xx, oo);
     });
 }
 
-/// x̃·õ / (|x̃|² + |õ|² − x̃·õ) on centred values; defined (0) for a flat vertex.
+/// x̃·õ / (|x̃| |õ|); NaN for a flat vertex (x̃ = 0).
+std::vector<float> cosine(const FeatureTable& table, const std::vector<double>& o)
+{
+    return centredSimilarity(table, o, "the cosine similarity", [](double xo, double xx, double oo) {
+        return xx > 0 ? xo / (std::sqrt(xx) * std::sqrt(oo)) : kNaN;  // a flat vertex has no direction
+    });
+}
+
+/// x̃·õ / (|x̃|² + |õ|² − x̃·õ); defined (0) for a flat vertex.
 std::vector<float> tanimoto(const FeatureTable& table, const std::vector<double>& o)
 {
-    const std::size_t dim = table.dimension();
-    const std::vector<double> flat = flatReference(table);
-    const std::vector<double> oc = centredReference(table, o, "the Tanimoto similarity");
-    double oo = 0;
-    for (double v : oc) oo += v * v;
-    const double* fp = flat.data();
-    const double* cp = oc.data();
-    return forEachVertex(table, [=](const float* x) {
-        double xo = 0, xx = 0;
-        for (std::size_t e = 0; e < dim; ++e) {
-            const double xc = double(x[e]) - fp[e];
-            xo += xc * cp[e];
-            xx += xc * xc;
-        }
+    return centredSimilarity(table, o, "the Tanimoto similarity", [](double xo, double xx, double oo) {
         // |x̃|² + |õ|² − x̃·õ ≥ (|x̃|² + |õ|²)/2 > 0 since õ ≠ 0.
         const double den = xx + oo - xo;
         return den > 0 ? xo / den : kNaN;

@@ -92,9 +92,9 @@ struct MetricResult {
 
 /// f(p_i) for every vertex of @p table against the reference @p reference (dimension()
 /// values, e.g. flatReference(), vertexReference() or the user's vector).
-/// The Mahalanobis-inspired form (Eq. 11) can be negative for mixed-sign differences, since
-/// W is not symmetric: f is then −sqrt(−q) (signed, so that ordering and continuity are
-/// kept), and such vertices are counted.
+/// The Mahalanobis-inspired form (Eq. 11): W is not symmetric, but its symmetric part is
+/// positive definite for Eq. 9/10 (tested), so q ≥ 0 for every real difference; should
+/// rounding give q < 0, f is −sqrt(−q) (signed: ordering and continuity kept) and counted.
 /// @throw InvalidInputError if the reference has the wrong length or a NaN, p ≤ 0 or NaN,
 ///        or a similarity is asked against a reference it cannot use (Cosine and Tanimoto:
 ///        the flat reference; Correlation: a reference whose elements are all equal).
