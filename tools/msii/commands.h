@@ -19,5 +19,9 @@ std::function<int()> addComputeCommand(CLI::App& app);
 std::function<int()> addMetricCommand(CLI::App& app);
 /// Adds `msii smooth` (fast 1-ring smoothing, paper Sec. 3.2).
 std::function<int()> addSmoothCommand(CLI::App& app);
+/// Adds `msii map` (OpenEXR feature maps).
+std::function<int()> addMapCommand(CLI::App& app);
+/// Adds `msii render` (PNG pictures).
+std::function<int()> addRenderCommand(CLI::App& app);
 
 } // namespace msii::tools

@@ -43,15 +43,15 @@ FeatureMesh readFeatureMesh(const std::string& input, const std::vector<std::str
 }
 
 std::string outputPath(const std::string& input, const std::string& output, const std::string& suffix,
-                       bool overwrite)
+                       bool overwrite, const std::string& extension)
 {
     std::string path = output;
     if (path.empty()) {
         const fs::path in(input);
-        path = (in.parent_path() / (in.stem().string() + "." + suffix + ".ply")).string();
+        path = (in.parent_path() / (in.stem().string() + "." + suffix + extension)).string();
     }
-    if (fs::path(path).extension() != ".ply")
-        throw InvalidInputError("the output '" + path + "' must be a .ply file");
+    if (fs::path(path).extension() != extension)
+        throw InvalidInputError("the output '" + path + "' must be a " + extension + " file");
     if (!overwrite && fs::exists(path))
         throw IOError("'" + path + "' exists already (use --overwrite to replace it)");
     checkWritable(path);

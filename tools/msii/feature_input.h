@@ -18,8 +18,9 @@ struct FeatureMesh {
 /// features by those of each GigaMesh `.mat` file in @p matFiles.
 FeatureMesh readFeatureMesh(const std::string& input, const std::vector<std::string>& matFiles);
 
-/// --output, else <input folder>/<input stem>.<suffix>.ply; checks that it may be written.
+/// --output, else <input folder>/<input stem>.<suffix><extension>; checks that it may be
+/// written and has the extension.
 std::string outputPath(const std::string& input, const std::string& output, const std::string& suffix,
-                       bool overwrite);
+                       bool overwrite, const std::string& extension = ".ply");
 
 } // namespace msii::tools

@@ -18,6 +18,8 @@ int main(int argc, char** argv)
     auto runCompute = msii::tools::addComputeCommand(app);
     auto runMetric = msii::tools::addMetricCommand(app);
     auto runSmooth = msii::tools::addSmoothCommand(app);
+    auto runMap = msii::tools::addMapCommand(app);
+    auto runRender = msii::tools::addRenderCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::Success& e) {  // --help, --help-all, --version
@@ -30,6 +32,8 @@ int main(int argc, char** argv)
         if (app.got_subcommand("compute")) return runCompute();
         if (app.got_subcommand("metric")) return runMetric();
         if (app.got_subcommand("smooth")) return runSmooth();
+        if (app.got_subcommand("map")) return runMap();
+        if (app.got_subcommand("render")) return runRender();
     } catch (const std::bad_alloc&) {
         std::cerr << "msii: error: out of memory (try a larger --voxel-size)\n";
         return 1;

@@ -1,0 +1,282 @@
+#include <msii/map/feature_map.h>
+
+#include <msii/core/errors.h>
+#include <msii/core/stopwatch.h>
+
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfStandardAttributes.h>
+#include <OpenEXR/ImfStringAttribute.h>
+#include <OpenEXR/ImfDoubleAttribute.h>
+#include <OpenEXR/ImfVecAttribute.h>
+#include <OpenEXR/ImfFloatVectorAttribute.h>
+#include <OpenEXR/ImfThreading.h>
+#include <Iex.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/info.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <unistd.h>
+
+namespace msii {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kRowsPerChunk = 64;
+
+Imf::Compression toImf(ExrCompression c)
+{
+    switch (c) {
+    case ExrCompression::None: return Imf::NO_COMPRESSION;
+    case ExrCompression::Rle: return Imf::RLE_COMPRESSION;
+    case ExrCompression::Zips: return Imf::ZIPS_COMPRESSION;
+    case ExrCompression::Zip: return Imf::ZIP_COMPRESSION;
+    case ExrCompression::Piz: return Imf::PIZ_COMPRESSION;
+    }
+    return Imf::ZIP_COMPRESSION;
+}
+
+Imath::V3d v3(const Vec3& v) { return Imath::V3d(v.x, v.y, v.z); }
+Vec3 vec(const Imath::V3d& v) { return Vec3(v.x, v.y, v.z); }
+
+/// A temporary name next to @p target; removed unless released.
+class TempName {
+public:
+    explicit TempName(const std::string& target)
+    {
+        static std::atomic<int> counter{0};
+        const fs::path t(target);
+        mPath = (t.parent_path() / ("." + t.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
+                                    std::to_string(counter++)))
+                    .string();
+    }
+    ~TempName()
+    {
+        if (!mReleased) {
+            std::error_code ec;
+            fs::remove(mPath, ec);
+        }
+    }
+    const std::string& path() const { return mPath; }
+    void renameTo(const std::string& target)
+    {
+        std::error_code ec;
+        fs::rename(mPath, target, ec);
+        if (ec) throw IOError("cannot write " + target + ": " + ec.message());
+        mReleased = true;
+    }
+
+private:
+    std::string mPath;
+    bool mReleased = false;
+};
+
+} // namespace
+
+ExrCompression parseExrCompression(const std::string& name)
+{
+    if (name == "none") return ExrCompression::None;
+    if (name == "rle") return ExrCompression::Rle;
+    if (name == "zips") return ExrCompression::Zips;
+    if (name == "zip") return ExrCompression::Zip;
+    if (name == "piz") return ExrCompression::Piz;
+    throw InvalidInputError("unknown EXR compression '" + name + "' (use zip, zips, piz, rle or none; all lossless)");
+}
+
+FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, const MapFrame& frame,
+                               const std::vector<VertexProperty>& properties,
+                               const FeatureMapOptions& options, Progress* progress)
+{
+    static const std::set<std::string> reserved{"height", "normal.x", "normal.y", "normal.z", "mask"};
+    std::set<std::string> seen;
+    for (const VertexProperty& p : properties) {
+        if (p.values.size() != mesh.numVertices())
+            throw InvalidInputError("property '" + p.name + "' does not have one value per vertex");
+        if (p.name.empty() || reserved.count(p.name) || !seen.insert(p.name).second)
+            throw InvalidInputError("property name '" + p.name + "' is empty, reserved or repeated");
+    }
+    if (options.zipLevel < 1 || options.zipLevel > 9) throw InvalidInputError("the zip level must be 1 to 9");
+
+    FeatureMapInfo info;
+    Stopwatch stage;
+    const PixelHits hits = rasterize(mesh, frame, progress);
+    info.coveredPixels = hits.covered;
+    // Per-vertex values, vertex-major (normal x/y/z in the map frame, then the properties), so
+    // that a pixel reads three contiguous rows.
+    const std::size_t nv = mesh.numVertices(), numValues = 3 + properties.size();
+    std::vector<float> table(nv * numValues);
+    {
+        const std::vector<Vec3> n = vertexNormals(mesh);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                float* row = table.data() + i * numValues;
+                row[0] = float(dot(n[i], frame.axisU));
+                row[1] = float(dot(n[i], frame.axisV));
+                row[2] = float(dot(n[i], frame.normal));
+                for (std::size_t q = 0; q < properties.size(); ++q) row[3 + q] = properties[q].values[i];
+            }
+        });
+    }
+    info.rasterSeconds = stage.seconds();
+    stage.restart();
+
+    const int width = frame.width, height = frame.height;
+    const Imf::PixelType type = options.half ? Imf::HALF : Imf::FLOAT;
+    Imf::Header header(width, height);
+    header.compression() = toImf(options.compression);
+    header.zipCompressionLevel() = options.zipLevel;
+    // Channel order in the band buffer: height, normal.x/y/z, mask, then the properties.
+    std::vector<std::string> names{"height", "normal.x", "normal.y", "normal.z", "mask"};
+    for (const VertexProperty& p : properties) names.push_back(p.name);
+    for (const std::string& name : names) header.channels().insert(name, Imf::Channel(type));
+    header.insert("msii:pixelSize", Imf::DoubleAttribute(frame.pixelSize));
+    header.insert("msii:origin", Imf::V3dAttribute(v3(frame.origin)));
+    header.insert("msii:axisU", Imf::V3dAttribute(v3(frame.axisU)));
+    header.insert("msii:axisV", Imf::V3dAttribute(v3(frame.axisV)));
+    header.insert("msii:normal", Imf::V3dAttribute(v3(frame.normal)));
+    header.insert("msii:minU", Imf::DoubleAttribute(frame.minU));
+    header.insert("msii:maxV", Imf::DoubleAttribute(frame.maxV));
+    header.insert("msii:units", Imf::StringAttribute(options.units));
+    header.insert("msii:view", Imf::StringAttribute(mapViewName(frame)));
+    header.insert("msii:source", Imf::StringAttribute(options.source));
+    header.insert("msii:parameters", Imf::StringAttribute(options.parameters));
+    std::vector<float> radii(options.radii.begin(), options.radii.end());
+    header.insert("msii:radii", Imf::FloatVectorAttribute(radii));
+    Imf::addComments(header, "msii feature map: pixel (x, y) centre at u = minU + (x + 0.5) pixelSize, "
+                             "v = maxV - (y + 0.5) pixelSize; point = origin + u axisU + v axisV + "
+                             "height normal; NaN = background (see mask)");
+
+    const std::size_t nc = names.size();
+    const std::size_t chunkPixels = std::size_t(width) * kRowsPerChunk;
+    std::vector<float> band(nc * chunkPixels);
+    std::vector<std::uint16_t> bandHalf;  // half bits when options.half
+    if (options.half) bandHalf.resize(nc * chunkPixels);
+
+    TempName temp(path);
+    try {
+        Imf::setGlobalThreadCount(int(tbb::info::default_concurrency()));
+        Imf::OutputFile file(temp.path().c_str(), header);
+        const int numChunks = (height + kRowsPerChunk - 1) / kRowsPerChunk;
+        if (progress) progress->start("writing the feature map", std::size_t(numChunks));
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        for (int y0 = 0; y0 < height; y0 += kRowsPerChunk) {
+            const int rows = std::min(kRowsPerChunk, height - y0);
+            tbb::parallel_for(tbb::blocked_range<int>(0, rows), [&](const auto& r) {
+                std::vector<float> value(numValues);
+                for (int y = r.begin(); y < r.end(); ++y)
+                    for (int x = 0; x < width; ++x) {
+                        const std::size_t k = hits.index(x, y0 + y);
+                        const std::size_t at = std::size_t(y) * std::size_t(width) + std::size_t(x);
+                        const std::uint32_t t = hits.triangle[k];
+                        band[at] = hits.depth[k];
+                        band[4 * chunkPixels + at] = t != PixelHits::kNone ? 1.0f : 0.0f;
+                        if (t == PixelHits::kNone) {
+                            for (std::size_t c = 1; c < nc; ++c)
+                                if (c != 4) band[c * chunkPixels + at] = nan;
+                            continue;
+                        }
+                        // Linear interpolation over the triangle (barycentric weights).
+                        const Triangle& tri = mesh.triangles[t];
+                        const float w1 = hits.b1[k], w2 = hits.b2[k], w0 = 1.0f - w1 - w2;
+                        const float* r0 = table.data() + std::size_t(tri[0]) * numValues;
+                        const float* r1 = table.data() + std::size_t(tri[1]) * numValues;
+                        const float* r2 = table.data() + std::size_t(tri[2]) * numValues;
+                        for (std::size_t q = 0; q < numValues; ++q) value[q] = w0 * r0[q] + w1 * r1[q] + w2 * r2[q];
+                        const float len = std::sqrt(value[0] * value[0] + value[1] * value[1] + value[2] * value[2]);
+                        for (int c = 0; c < 3; ++c)
+                            band[std::size_t(1 + c) * chunkPixels + at] = len > 0 ? value[std::size_t(c)] / len : nan;
+                        for (std::size_t q = 3; q < numValues; ++q) band[(2 + q) * chunkPixels + at] = value[q];
+                    }
+            });
+            Imf::FrameBuffer fb;
+            for (std::size_t c = 0; c < nc; ++c) {
+                // Slices address pixel (x, y) as base + x·xStride + y·yStride: shift by y0 rows.
+                if (options.half) {
+                    half* h = reinterpret_cast<half*>(bandHalf.data() + c * chunkPixels);
+                    const float* f = band.data() + c * chunkPixels;
+                    for (std::size_t i = 0; i < std::size_t(rows) * std::size_t(width); ++i) h[i] = half(f[i]);
+                    char* base = reinterpret_cast<char*>(h) - std::ptrdiff_t(y0) * width * std::ptrdiff_t(sizeof(half));
+                    fb.insert(names[c], Imf::Slice(Imf::HALF, base, sizeof(half), sizeof(half) * std::size_t(width)));
+                } else {
+                    char* base = reinterpret_cast<char*>(band.data() + c * chunkPixels) -
+                                 std::ptrdiff_t(y0) * width * std::ptrdiff_t(sizeof(float));
+                    fb.insert(names[c], Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * std::size_t(width)));
+                }
+            }
+            file.setFrameBuffer(fb);
+            file.writePixels(rows);
+            if (progress) progress->advance();
+        }
+        if (progress) progress->end();
+    } catch (const Iex::BaseExc& e) {
+        throw IOError("cannot write " + path + ": " + e.what());
+    }
+    temp.renameTo(path);
+    info.writeSeconds = stage.seconds();
+    for (auto it = header.channels().begin(); it != header.channels().end(); ++it) info.channels.push_back(it.name());
+    return info;
+}
+
+FeatureMapImage readFeatureMap(const std::string& path)
+{
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) throw IOError("cannot read " + path + ": no such file");
+    FeatureMapImage image;
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imf::Header& header = file.header();
+        const Imath::Box2i dw = header.dataWindow();
+        image.width = dw.max.x - dw.min.x + 1;
+        image.height = dw.max.y - dw.min.y + 1;
+        const std::size_t n = std::size_t(image.width) * std::size_t(image.height);
+        Imf::FrameBuffer fb;
+        for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
+            std::vector<float>& data = image.channels[it.name()];
+            data.assign(n, 0.0f);
+            char* base = reinterpret_cast<char*>(data.data()) -
+                         (std::ptrdiff_t(dw.min.x) + std::ptrdiff_t(dw.min.y) * image.width) * std::ptrdiff_t(sizeof(float));
+            fb.insert(it.name(), Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * std::size_t(image.width)));
+        }
+        file.setFrameBuffer(fb);
+        file.readPixels(dw.min.y, dw.max.y);
+
+        const auto* ps = header.findTypedAttribute<Imf::DoubleAttribute>("msii:pixelSize");
+        const auto* o = header.findTypedAttribute<Imf::V3dAttribute>("msii:origin");
+        const auto* u = header.findTypedAttribute<Imf::V3dAttribute>("msii:axisU");
+        const auto* v = header.findTypedAttribute<Imf::V3dAttribute>("msii:axisV");
+        const auto* w = header.findTypedAttribute<Imf::V3dAttribute>("msii:normal");
+        const auto* minU = header.findTypedAttribute<Imf::DoubleAttribute>("msii:minU");
+        const auto* maxV = header.findTypedAttribute<Imf::DoubleAttribute>("msii:maxV");
+        if (ps && o && u && v && w && minU && maxV) {
+            image.hasFrame = true;
+            image.frame.pixelSize = ps->value();
+            image.frame.origin = vec(o->value());
+            image.frame.axisU = vec(u->value());
+            image.frame.axisV = vec(v->value());
+            image.frame.normal = vec(w->value());
+            image.frame.minU = minU->value();
+            image.frame.maxV = maxV->value();
+            image.frame.width = image.width;
+            image.frame.height = image.height;
+        }
+        if (const auto* a = header.findTypedAttribute<Imf::StringAttribute>("msii:units")) image.units = a->value();
+        if (const auto* a = header.findTypedAttribute<Imf::StringAttribute>("msii:source")) image.source = a->value();
+        if (const auto* a = header.findTypedAttribute<Imf::StringAttribute>("msii:parameters")) image.parameters = a->value();
+        if (const auto* a = header.findTypedAttribute<Imf::FloatVectorAttribute>("msii:radii"))
+            image.radii.assign(a->value().begin(), a->value().end());
+    } catch (const Iex::BaseExc& e) {
+        throw IOError("cannot read " + path + ": " + e.what());
+    }
+    return image;
+}
+
+} // namespace msii

@@ -1,0 +1,233 @@
+#include <msii/map/map_frame.h>
+
+#include <msii/core/errors.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace msii {
+namespace {
+
+using Mat3 = std::array<std::array<double, 3>, 3>;
+
+/// Eigen-decomposition of a symmetric 3×3 matrix by cyclic Jacobi rotations: eigenvalues
+/// ascending, eigenvectors as columns of the returned matrix.
+void symmetricEigen(Mat3 a, std::array<double, 3>& values, std::array<Vec3, 3>& vectors)
+{
+    Mat3 v{};
+    for (int i = 0; i < 3; ++i) v[i][i] = 1;
+    for (int sweep = 0; sweep < 50; ++sweep) {
+        const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        const double diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
+        if (off <= 1e-30 * diag || off == 0) break;
+        for (int p = 0; p < 2; ++p)
+            for (int q = p + 1; q < 3; ++q) {
+                if (a[p][q] == 0) continue;
+                const double theta = (a[q][q] - a[p][p]) / (2 * a[p][q]);
+                const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1));
+                const double c = 1 / std::sqrt(t * t + 1), s = t * c;
+                for (int k = 0; k < 3; ++k) {  // a ← Jᵀ a J
+                    const double akp = a[k][p], akq = a[k][q];
+                    a[k][p] = c * akp - s * akq;
+                    a[k][q] = s * akp + c * akq;
+                }
+                for (int k = 0; k < 3; ++k) {
+                    const double apk = a[p][k], aqk = a[q][k];
+                    a[p][k] = c * apk - s * aqk;
+                    a[q][k] = s * apk + c * aqk;
+                }
+                for (int k = 0; k < 3; ++k) {
+                    const double vkp = v[k][p], vkq = v[k][q];
+                    v[k][p] = c * vkp - s * vkq;
+                    v[k][q] = s * vkp + c * vkq;
+                }
+            }
+    }
+    std::array<int, 3> order{0, 1, 2};
+    std::sort(order.begin(), order.end(), [&](int i, int j) { return a[i][i] < a[j][j]; });
+    for (int k = 0; k < 3; ++k) {
+        values[k] = a[order[k]][order[k]];
+        vectors[k] = Vec3(v[0][order[k]], v[1][order[k]], v[2][order[k]]);
+    }
+}
+
+/// The sign that makes the largest component of @p a positive (a deterministic choice).
+Vec3 canonicalSign(const Vec3& a)
+{
+    const double ax = std::abs(a.x), ay = std::abs(a.y), az = std::abs(a.z);
+    const double big = ax >= ay && ax >= az ? a.x : (ay >= az ? a.y : a.z);
+    return big < 0 ? -a : a;
+}
+
+void axesOfView(MapView view, const Vec3& direction, Vec3& u, Vec3& v, Vec3& w)
+{
+    switch (view) {
+    case MapView::PlusZ: u = {1, 0, 0}, v = {0, 1, 0}; break;
+    case MapView::MinusZ: u = {-1, 0, 0}, v = {0, 1, 0}; break;
+    case MapView::PlusX: u = {0, 1, 0}, v = {0, 0, 1}; break;
+    case MapView::MinusX: u = {0, -1, 0}, v = {0, 0, 1}; break;
+    case MapView::PlusY: u = {-1, 0, 0}, v = {0, 0, 1}; break;
+    case MapView::MinusY: u = {1, 0, 0}, v = {0, 0, 1}; break;
+    case MapView::Direction: {
+        w = normalized(direction);
+        // Up on the picture: +z projected into the plane, or +y when looking along z.
+        const Vec3 up = std::abs(w.z) < 0.99 ? Vec3(0, 0, 1) : Vec3(0, 1, 0);
+        v = normalized(up - w * dot(up, w));
+        u = cross(v, w);
+        return;
+    }
+    case MapView::BestFit: break;
+    }
+    w = cross(u, v);
+}
+
+} // namespace
+
+Vec3 MapFrame::toMap(const Vec3& p) const
+{
+    const Vec3 d = p - origin;
+    return {dot(d, axisU), dot(d, axisV), dot(d, normal)};
+}
+
+void parseMapView(const std::string& text, MapFrameOptions& options)
+{
+    static const std::pair<const char*, MapView> names[] = {
+        {"best", MapView::BestFit}, {"+x", MapView::PlusX}, {"-x", MapView::MinusX},
+        {"+y", MapView::PlusY},     {"-y", MapView::MinusY}, {"+z", MapView::PlusZ},
+        {"-z", MapView::MinusZ}};
+    for (const auto& [name, view] : names)
+        if (text == name) {
+            options.view = view;
+            return;
+        }
+    std::stringstream in(text);
+    double c[3];
+    char comma1 = 0, comma2 = 0;
+    if ((in >> c[0] >> comma1 >> c[1] >> comma2 >> c[2]) && comma1 == ',' && comma2 == ',' && (in >> std::ws).eof()) {
+        const Vec3 d(c[0], c[1], c[2]);
+        if (!isFinite(d) || !(norm(d) > 0))
+            throw InvalidInputError("the view direction '" + text + "' has zero length or is not finite");
+        options.view = MapView::Direction;
+        options.direction = d;
+        return;
+    }
+    throw InvalidInputError("unknown view '" + text + "' (use best, +x, -x, +y, -y, +z, -z or a direction X,Y,Z)");
+}
+
+std::string mapViewName(const MapFrame& frame)
+{
+    switch (frame.view) {
+    case MapView::BestFit: return "best-fit plane";
+    case MapView::PlusX: return "+x";
+    case MapView::MinusX: return "-x";
+    case MapView::PlusY: return "+y";
+    case MapView::MinusY: return "-y";
+    case MapView::PlusZ: return "+z";
+    case MapView::MinusZ: return "-z";
+    case MapView::Direction: break;
+    }
+    std::ostringstream s;
+    s.precision(6);
+    s << "direction " << frame.normal.x << "," << frame.normal.y << "," << frame.normal.z;
+    return s.str();
+}
+
+MapFrame makeMapFrame(const TriMesh& mesh, const MapFrameOptions& options)
+{
+    if (mesh.empty()) throw InvalidInputError("the mesh is empty: nothing to project");
+    const int given = (options.longerSidePixels != 0) + (options.pixelSize != 0) + (options.dpi != 0);
+    if (given != 1)
+        throw InvalidInputError("give the resolution exactly once: as pixels, as a pixel size or as DPI");
+    if (options.longerSidePixels < 0 || options.pixelSize < 0 || options.dpi < 0 ||
+        !std::isfinite(options.pixelSize) || !std::isfinite(options.dpi))
+        throw InvalidInputError("the resolution must be positive");
+    if (options.view == MapView::Direction && (!isFinite(options.direction) || !(norm(options.direction) > 0)))
+        throw InvalidInputError("the view direction has zero length or is not finite");
+
+    // Area, centroid and second moment of the surface: ∫ x xᵀ dA = A/12 (Σ vᵢvᵢᵀ + s sᵀ) per
+    // triangle (s = Σ vᵢ); the vector area for the side the surface faces.
+    double area = 0;
+    Vec3 first, vectorArea;
+    Mat3 second{};
+    for (const Triangle& t : mesh.triangles) {
+        const Vec3 &a = mesh.points[t[0]], &b = mesh.points[t[1]], &c = mesh.points[t[2]];
+        const Vec3 va = cross(b - a, c - a) * 0.5;
+        const double A = norm(va);
+        area += A;
+        vectorArea += va;
+        const Vec3 s = a + b + c;
+        first += s * (A / 3.0);
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                second[i][j] += A / 12.0 * (a[i] * a[j] + b[i] * b[j] + c[i] * c[j] + s[i] * s[j]);
+    }
+    if (!(area > 0) || !std::isfinite(area)) throw InvalidInputError("the mesh has no area: nothing to project");
+
+    MapFrame frame;
+    frame.view = options.view;
+    frame.origin = first / area;
+    if (options.view == MapView::BestFit) {
+        Mat3 cov;
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) cov[i][j] = second[i][j] / area - frame.origin[i] * frame.origin[j];
+        std::array<double, 3> values;
+        std::array<Vec3, 3> vectors;
+        symmetricEigen(cov, values, vectors);
+        Vec3 w = normalized(vectors[0]);
+        // Face the side the surface faces (its vector area); for closed meshes (vector area
+        // about 0) the deterministic sign of canonicalSign.
+        if (std::abs(dot(vectorArea, w)) > 1e-6 * area) {
+            if (dot(vectorArea, w) < 0) w = -w;
+        } else {
+            w = canonicalSign(w);
+        }
+        if (options.flip) w = -w;
+        Vec3 u = canonicalSign(normalized(vectors[2] - w * dot(vectors[2], w)));
+        frame.normal = w;
+        frame.axisU = u;
+        frame.axisV = cross(w, u);
+    } else {
+        axesOfView(options.view, options.direction, frame.axisU, frame.axisV, frame.normal);
+        frame.origin = Vec3();
+    }
+
+    // Projected area (empty when seen edge-on) and extent.
+    double projected = 0;
+    for (const Triangle& t : mesh.triangles) {
+        const Vec3 &a = mesh.points[t[0]], &b = mesh.points[t[1]], &c = mesh.points[t[2]];
+        projected += std::abs(dot(cross(b - a, c - a), frame.normal)) * 0.5;
+    }
+    if (!(projected > 1e-9 * area))
+        throw InvalidInputError("the projection is empty: the mesh is seen edge-on from this view");
+    double minU = std::numeric_limits<double>::max(), maxU = -minU, minV = minU, maxV = -minU;
+    for (const Triangle& t : mesh.triangles)
+        for (std::uint32_t i : t) {
+            const Vec3 m = frame.toMap(mesh.points[i]);
+            minU = std::min(minU, m.x), maxU = std::max(maxU, m.x);
+            minV = std::min(minV, m.y), maxV = std::max(maxV, m.y);
+        }
+    const double extent = std::max(maxU - minU, maxV - minV);
+    if (options.longerSidePixels > 0) frame.pixelSize = extent / options.longerSidePixels;
+    else if (options.pixelSize > 0) frame.pixelSize = options.pixelSize;
+    else frame.pixelSize = 25.4 / options.dpi;
+    if (!(frame.pixelSize > 0)) throw InvalidInputError("the projection is empty: the mesh has no extent");
+    const double w = std::ceil((maxU - minU) / frame.pixelSize - 1e-9);
+    const double h = std::ceil((maxV - minV) / frame.pixelSize - 1e-9);
+    if (w > options.maxSidePixels || h > options.maxSidePixels) {
+        std::ostringstream s;
+        s << "the image would be " << w << " x " << h << " pixels; the largest allowed side is "
+          << options.maxSidePixels << " (choose a larger pixel size or fewer pixels)";
+        throw InvalidInputError(s.str());
+    }
+    frame.width = std::max(1, int(w));
+    frame.height = std::max(1, int(h));
+    // Centre the mesh in the image (it fits exactly along the longer side).
+    frame.minU = 0.5 * (minU + maxU) - 0.5 * frame.width * frame.pixelSize;
+    frame.maxV = 0.5 * (minV + maxV) + 0.5 * frame.height * frame.pixelSize;
+    return frame;
+}
+
+} // namespace msii

@@ -1,0 +1,125 @@
+#include <msii/map/rasterize.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace msii {
+namespace {
+
+constexpr int kBandRows = 16;
+
+struct Projected {
+    double x, y, h;  // continuous pixel coordinates and height
+};
+
+} // namespace
+
+std::vector<Vec3> vertexNormals(const TriMesh& mesh)
+{
+    std::vector<Vec3> normal(mesh.numVertices());
+    for (const Triangle& t : mesh.triangles) {
+        const Vec3 a = cross(mesh.points[t[1]] - mesh.points[t[0]], mesh.points[t[2]] - mesh.points[t[0]]);
+        for (std::uint32_t v : t) normal[v] += a;
+    }
+    for (Vec3& n : normal) {
+        const double len = norm(n);
+        n = len > 0 ? n / len : Vec3();
+    }
+    return normal;
+}
+
+PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, Progress* progress)
+{
+    PixelHits hits;
+    hits.width = frame.width;
+    hits.height = frame.height;
+    const std::size_t numPixels = std::size_t(frame.width) * std::size_t(frame.height);
+    hits.triangle.assign(numPixels, PixelHits::kNone);
+    hits.b1.assign(numPixels, 0.0f);
+    hits.b2.assign(numPixels, 0.0f);
+    hits.depth.assign(numPixels, std::numeric_limits<float>::quiet_NaN());
+
+    std::vector<Projected> p(mesh.numVertices());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.size()), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            const Vec3 m = frame.toMap(mesh.points[i]);
+            p[i] = {frame.pixelX(m.x), frame.pixelY(m.y), m.z};
+        }
+    });
+
+    // Rows of pixel centres a triangle can cover, and the bands they fall in (CSR lists).
+    const int numBands = (frame.height + kBandRows - 1) / kBandRows;
+    const std::size_t nt = mesh.numTriangles();
+    const auto rowRange = [&](std::size_t t, int& lo, int& hi) {
+        const Triangle& tri = mesh.triangles[t];
+        const double y0 = std::min({p[tri[0]].y, p[tri[1]].y, p[tri[2]].y});
+        const double y1 = std::max({p[tri[0]].y, p[tri[1]].y, p[tri[2]].y});
+        lo = std::max(0, int(std::ceil(y0 - 0.5)));
+        hi = std::min(frame.height - 1, int(std::floor(y1 - 0.5)));
+    };
+    std::vector<std::size_t> bandStart(std::size_t(numBands) + 1, 0);
+    for (std::size_t t = 0; t < nt; ++t) {
+        int lo, hi;
+        rowRange(t, lo, hi);
+        if (lo > hi) continue;
+        for (int b = lo / kBandRows; b <= hi / kBandRows; ++b) ++bandStart[std::size_t(b) + 1];
+    }
+    for (int b = 0; b < numBands; ++b) bandStart[std::size_t(b) + 1] += bandStart[std::size_t(b)];
+    std::vector<std::uint32_t> bandTriangles(bandStart.back());
+    {
+        std::vector<std::size_t> fill(bandStart.begin(), bandStart.end() - 1);
+        for (std::size_t t = 0; t < nt; ++t) {
+            int lo, hi;
+            rowRange(t, lo, hi);
+            if (lo > hi) continue;
+            for (int b = lo / kBandRows; b <= hi / kBandRows; ++b) bandTriangles[fill[std::size_t(b)]++] = std::uint32_t(t);
+        }
+    }
+
+    if (progress) progress->start("rasterising", std::size_t(numBands));
+    tbb::parallel_for(tbb::blocked_range<int>(0, numBands), [&](const auto& range) {
+        for (int band = range.begin(); band < range.end(); ++band) {
+            const int rowLo = band * kBandRows, rowHi = std::min(frame.height, rowLo + kBandRows) - 1;
+            // Triangles in index order, so that ties in height go to the lower index.
+            for (std::size_t k = bandStart[std::size_t(band)]; k < bandStart[std::size_t(band) + 1]; ++k) {
+                const std::uint32_t t = bandTriangles[k];
+                const Triangle& tri = mesh.triangles[t];
+                const Projected &a = p[tri[0]], &b = p[tri[1]], &c = p[tri[2]];
+                const double area = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+                if (area == 0 || !std::isfinite(area)) continue;
+                const double inv = 1.0 / area;
+                const int y0 = std::max(rowLo, int(std::ceil(std::min({a.y, b.y, c.y}) - 0.5)));
+                const int y1 = std::min(rowHi, int(std::floor(std::max({a.y, b.y, c.y}) - 0.5)));
+                const int x0 = std::max(0, int(std::ceil(std::min({a.x, b.x, c.x}) - 0.5)));
+                const int x1 = std::min(frame.width - 1, int(std::floor(std::max({a.x, b.x, c.x}) - 0.5)));
+                for (int y = y0; y <= y1; ++y) {
+                    const double py = y + 0.5;
+                    for (int x = x0; x <= x1; ++x) {
+                        const double px = x + 0.5;
+                        // Barycentric weights of b and c (signed areas over the whole).
+                        const double w1 = ((px - a.x) * (c.y - a.y) - (c.x - a.x) * (py - a.y)) * inv;
+                        const double w2 = ((b.x - a.x) * (py - a.y) - (px - a.x) * (b.y - a.y)) * inv;
+                        const double w0 = 1.0 - w1 - w2;
+                        if (w0 < 0 || w1 < 0 || w2 < 0) continue;
+                        const double h = w0 * a.h + w1 * b.h + w2 * c.h;
+                        const std::size_t i = hits.index(x, y);
+                        if (hits.triangle[i] != PixelHits::kNone && !(h > hits.depth[i])) continue;
+                        hits.triangle[i] = t;
+                        hits.b1[i] = float(w1);
+                        hits.b2[i] = float(w2);
+                        hits.depth[i] = float(h);
+                    }
+                }
+            }
+            if (progress) progress->advance();
+        }
+    });
+    if (progress) progress->end();
+    for (std::uint32_t t : hits.triangle) hits.covered += t != PixelHits::kNone;
+    return hits;
+}
+
+} // namespace msii

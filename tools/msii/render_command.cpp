@@ -1,0 +1,297 @@
+/// `msii render INPUT`: PNG pictures of a feature PLY or an EXR feature map (issue 5): false
+/// colour of a value with isolines, shaded relief (virtual illumination), the height map of
+/// the paper's Fig. 7c, with a colour bar and a scale bar.
+#include "commands.h"
+#include "feature_input.h"
+#include "map_input.h"
+
+#include <msii/core/errors.h>
+#include <msii/core/stopwatch.h>
+#include <msii/map/feature_map.h>
+#include <msii/map/rasterize.h>
+#include <msii/render/annotate.h>
+#include <msii/render/picture.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <sstream>
+
+namespace msii::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RenderArgs {
+    std::string input, output;
+    std::vector<std::string> matFiles;
+    ViewArgs view;
+    std::string show;  // a property/channel, "relief" or "height"; empty: quality, else relief
+    std::string colorMap;
+    std::string range, percentiles = "1,99";
+    double center = NAN;
+    int isolines = 0;
+    std::string levels;
+    std::string light = "315,45";
+    bool highContrast = false;
+    int contrastRadius = 16;
+    bool shade = false;
+    double shadeStrength = 0.6;
+    bool noColorBar = false, noScaleBar = false;
+    std::string units;
+    int threads = 0;
+    bool quiet = false, overwrite = false;
+};
+
+constexpr int kDefaultPixels = 2048;
+
+std::vector<double> parseNumbers(const std::string& text, const char* option)
+{
+    std::vector<double> out;
+    std::stringstream list(text);
+    std::string item;
+    while (std::getline(list, item, ',')) {
+        std::size_t used = 0;
+        double v = 0;
+        try {
+            v = std::stod(item, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used == 0 || used != item.size() || !std::isfinite(v))
+            throw InvalidInputError(std::string(option) + ": '" + item + "' is not a number");
+        out.push_back(v);
+    }
+    return out;
+}
+
+/// The channels of the picture, from an EXR map or a rasterised mesh.
+struct Channels {
+    int width = 0, height = 0;
+    double pixelSize = 0;
+    std::string units = "mm";
+    std::map<std::string, std::vector<float>> data;
+};
+
+std::string available(const std::vector<std::string>& names)
+{
+    std::string s;
+    for (const auto& n : names) s += (s.empty() ? "" : " ") + n;
+    return s.empty() ? "none" : s;
+}
+
+Channels channelsFromMap(const std::string& path, const std::string& value, bool needNormals)
+{
+    FeatureMapImage map = readFeatureMap(path);
+    Channels c;
+    c.width = map.width, c.height = map.height;
+    c.pixelSize = map.hasFrame ? map.frame.pixelSize : 0;
+    if (!map.units.empty()) c.units = map.units;
+    std::vector<std::string> names;
+    for (const auto& kv : map.channels) names.push_back(kv.first);
+    std::vector<std::string> wanted{"mask"};
+    if (!value.empty()) wanted.push_back(value);
+    if (needNormals) wanted.insert(wanted.end(), {"normal.x", "normal.y", "normal.z"});
+    for (const std::string& w : wanted) {
+        auto it = map.channels.find(w);
+        if (it == map.channels.end()) {
+            if (w == "mask") continue;
+            throw InvalidInputError("the map has no channel '" + w + "' (it has: " + available(names) + ")");
+        }
+        c.data[w] = std::move(it->second);
+    }
+    return c;
+}
+
+Channels channelsFromMesh(const std::string& path, const std::vector<std::string>& matFiles,
+                          const ViewArgs& view, const std::string& value, bool needNormals, Progress* progress)
+{
+    const MapFrameOptions frameOpts = frameOptions(view, kDefaultPixels);
+    FeatureMesh in = readFeatureMesh(path, matFiles);
+    const VertexProperty* property = nullptr;
+    if (!value.empty() && value != "height") {
+        for (const auto& p : in.properties)
+            if (p.name == value) property = &p;
+        if (!property) {
+            std::vector<std::string> names;
+            for (const auto& p : in.properties) names.push_back(p.name);
+            throw InvalidInputError("the input has no vertex property '" + value + "' (it has: " + available(names) + ")");
+        }
+    }
+    const MapFrame frame = makeMapFrame(in.mesh, frameOpts);
+    const PixelHits hits = rasterize(in.mesh, frame, progress);
+    Channels c;
+    c.width = frame.width, c.height = frame.height, c.pixelSize = frame.pixelSize;
+    const std::size_t n = hits.triangle.size();
+    auto& mask = c.data["mask"];
+    mask.resize(n);
+    for (std::size_t k = 0; k < n; ++k) mask[k] = hits.triangle[k] != PixelHits::kNone ? 1.0f : 0.0f;
+    if (value == "height") c.data["height"] = hits.depth;
+    if (property) {
+        auto& v = c.data[value];
+        v.resize(n);
+        for (std::size_t k = 0; k < n; ++k) v[k] = hits.interpolate(in.mesh, property->values, k);
+    }
+    if (needNormals) {
+        const std::vector<Vec3> normals = vertexNormals(in.mesh);
+        std::vector<float> comp[3];
+        for (auto& cc : comp) cc.resize(normals.size());
+        for (std::size_t i = 0; i < normals.size(); ++i) {
+            comp[0][i] = float(dot(normals[i], frame.axisU));
+            comp[1][i] = float(dot(normals[i], frame.axisV));
+            comp[2][i] = float(dot(normals[i], frame.normal));
+        }
+        const char* names[3] = {"normal.x", "normal.y", "normal.z"};
+        for (int a = 0; a < 3; ++a) {
+            auto& v = c.data[names[a]];
+            v.resize(n);
+            for (std::size_t k = 0; k < n; ++k) v[k] = hits.interpolate(in.mesh, comp[a], k);
+        }
+    }
+    return c;
+}
+
+int runRender(const RenderArgs& args)
+{
+    const Stopwatch total;
+    const bool isMap = fs::path(args.input).extension() == ".exr";
+    // What to show: relief (grey shading), height (Fig. 7c) or a value; default quality for
+    // feature files, relief for plain meshes.
+    std::string show = args.show;
+    PictureOptions options;
+    if (!args.colorMap.empty()) options.colorMap = parseColorMap(args.colorMap);
+    const std::vector<double> light = parseNumbers(args.light, "--light");
+    if (light.size() != 2) throw InvalidInputError("--light takes AZIMUTH,ELEVATION in degrees");
+    // --light uses the map-makers' convention (azimuth clockwise from up, where the light
+    // comes from); ShadingOptions measures the direction of travel counter-clockwise from +x.
+    options.shading.azimuthDeg = std::fmod(-90.0 - light[0] + 720.0, 360.0);
+    options.shading.elevationDeg = light[1];
+    options.shading.highContrast = args.highContrast;
+    options.shading.contrastRadius = args.contrastRadius;
+    options.shadeStrength = args.shadeStrength;
+    if (args.isolines < 0) throw InvalidInputError("--isolines must be 0 or more");
+    options.isolineCount = args.isolines;
+    if (!args.levels.empty()) options.isolineLevels = parseNumbers(args.levels, "--levels");
+    if (!args.range.empty()) {
+        const auto r = parseNumbers(args.range, "--range");
+        if (r.size() != 2 || !(r[0] < r[1])) throw InvalidInputError("--range takes LOW,HIGH with LOW < HIGH");
+        options.fixedRange = true;
+        options.range = {r[0], r[1]};
+    } else {
+        const auto p = parseNumbers(args.percentiles, "--percentiles");
+        if (p.size() != 2) throw InvalidInputError("--percentiles takes LOW,HIGH (0 to 100)");
+        options.loPercentile = p[0], options.hiPercentile = p[1];
+    }
+    if (std::isfinite(args.center)) options.centered = true, options.center = args.center;
+
+    Progress progress(!args.quiet && Progress::stderrIsTerminal());
+    Channels ch;
+    std::string value;
+    if (show.empty()) {
+        // quality when the input has it
+        show = "quality";
+        try {
+            ch = isMap ? channelsFromMap(args.input, show, args.shade)
+                       : channelsFromMesh(args.input, args.matFiles, args.view, show, args.shade, &progress);
+        } catch (const InvalidInputError& e) {
+            if (std::string(e.what()).find("no vertex property 'quality'") == std::string::npos &&
+                std::string(e.what()).find("no channel 'quality'") == std::string::npos)
+                throw;
+            show = "relief";
+        }
+    }
+    if (show == "relief") {
+        options.colour = false;
+        options.shade = true;
+        ch = isMap ? channelsFromMap(args.input, "", true)
+                   : channelsFromMesh(args.input, args.matFiles, args.view, "", true, &progress);
+    } else {
+        value = show;
+        options.shade = args.shade;
+        if (ch.data.empty())
+            ch = isMap ? channelsFromMap(args.input, value, args.shade)
+                       : channelsFromMesh(args.input, args.matFiles, args.view, value, args.shade, &progress);
+    }
+    if (!args.units.empty()) ch.units = args.units;
+    const std::string output = outputPath(args.input, args.output, show, args.overwrite, ".png");
+
+    PictureChannels pc;
+    pc.width = ch.width, pc.height = ch.height;
+    const auto get = [&](const char* name) -> const std::vector<float>* {
+        auto it = ch.data.find(name);
+        return it == ch.data.end() ? nullptr : &it->second;
+    };
+    pc.mask = get("mask");
+    pc.nx = get("normal.x"), pc.ny = get("normal.y"), pc.nz = get("normal.z");
+    if (!value.empty()) pc.value = get(value.c_str());
+    const PictureResult picture = renderPicture(pc, options);
+
+    FigureOptions figure;
+    figure.colorBar = options.colour && !args.noColorBar;
+    figure.colorMap = options.colorMap;
+    figure.range = picture.range;
+    figure.label = value == "height" ? "height (" + ch.units + ")" : value;
+    figure.isolines = picture.isolineLevels;
+    figure.scaleBar = !args.noScaleBar && ch.pixelSize > 0;
+    figure.pixelSize = ch.pixelSize;
+    figure.units = ch.units;
+    const RgbImage image = (figure.colorBar || figure.scaleBar) ? composeFigure(picture.image, figure) : picture.image;
+    writePng(output, image);
+    if (!args.quiet)
+        std::fprintf(stderr, "msii: %s -> %s (%d x %d pixels, %s%s, %.1f s)\n", args.input.c_str(), output.c_str(),
+                     image.width, image.height, show.c_str(),
+                     options.colour ? (" in [" + std::to_string(picture.range.lo) + ", " +
+                                       std::to_string(picture.range.hi) + "]").c_str()
+                                    : "",
+                     total.seconds());
+    return 0;
+}
+
+} // namespace
+
+std::function<int()> addRenderCommand(CLI::App& app)
+{
+    auto args = std::make_shared<RenderArgs>();
+    CLI::App* cmd = app.add_subcommand(
+        "render", "PNG picture of a feature PLY or an EXR map: false colour of a value with isolines, "
+                  "shaded relief (virtual illumination) or the height map, with colour bar and scale bar.");
+    cmd->add_option("input", args->input, "Mesh or feature PLY, or an EXR map from msii map")->required();
+    cmd->add_option("-o,--output", args->output, "Output PNG (default <input stem>.<what>.png)");
+    cmd->add_option("--mat", args->matFiles, "GigaMesh feature file(s) for the input mesh");
+    cmd->add_option("--show", args->show,
+                    "What to show: a vertex property or map channel (quality, V_16, f_cosine ...), "
+                    "height (height over the plane, paper Fig. 7c) or relief (virtual illumination). "
+                    "Default: quality if present, else relief");
+    cmd->add_option("--colormap", args->colorMap,
+                    "viridis (default), cividis, gray (sequential) or coolwarm (diverging)");
+    cmd->add_option("--range", args->range, "Colour range LOW,HIGH (default: --percentiles)");
+    cmd->add_option("--percentiles", args->percentiles, "Colour range from percentiles LOW,HIGH (default 1,99)");
+    cmd->add_option("--center", args->center,
+                    "Make the range symmetric about this value (e.g. 0.5 for V, the flat surface)");
+    cmd->add_option("--isolines", args->isolines, "Draw this many isolines evenly inside the range");
+    cmd->add_option("--levels", args->levels, "Draw isolines at these values, comma-separated");
+    cmd->add_flag("--shade", args->shade, "Modulate the colours by the shaded relief");
+    cmd->add_option("--shade-strength", args->shadeStrength, "With --shade: 0 (none) to 1 (full), default 0.6");
+    cmd->add_option("--light", args->light,
+                    "Light AZIMUTH,ELEVATION in degrees: azimuth clockwise from the top of the picture, "
+                    "where the light comes from (default 315,45: from the top left)");
+    cmd->add_flag("--high-contrast", args->highContrast,
+                  "Shade the normal's deviation from its local mean: shallow strokes become visible");
+    cmd->add_option("--contrast-radius", args->contrastRadius, "Radius of the local mean in pixels (default 16)");
+    cmd->add_flag("--no-colorbar", args->noColorBar, "No colour bar");
+    cmd->add_flag("--no-scalebar", args->noScaleBar, "No scale bar");
+    cmd->add_option("--units", args->units, "Units for the scale bar (default mm, or the map's)");
+    addViewOptions(cmd, args->view, kDefaultPixels);
+    cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
+    cmd->add_flag("-q,--quiet", args->quiet, "No progress, no summary; errors only");
+    cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output");
+    return [args]() {
+        const auto limit = limitThreads(args->threads);
+        return runRender(*args);
+    };
+}
+
+} // namespace msii::tools
