@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Sets up (installs missing Debian packages, builds Release), generates the bundled default
-# sample (a tablet-like surface with wedge impressions) and runs msii compute on it.
+# sample (a tablet-like surface with wedge impressions), runs msii compute on it, and makes
+# the pictures, the EXR feature map, the components and the outlines of the README.
 # Results go to demo-output/ (or $1).
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -12,4 +13,22 @@ mkdir -p "$out"
   --output "$out/tablet.ply"
 "$build_dir/tools/msii" compute "$out/tablet.ply" --radius 1.0 --scales 16 --overwrite \
   --output "$out/tablet.msii.ply"
-echo "msii demo: results in $out (tablet.msii.ply: V_01..V_16, S_01..S_16, P_01..P_16, L_01..L_16, quality; tablet.msii.json)"
+msii="$build_dir/tools/msii"
+"$msii" map "$out/tablet.msii.ply" --pixels 2048 --overwrite --output "$out/tablet.map.exr"
+"$msii" render "$out/tablet.msii.ply" --show quality --shade --isolines 5 --pixels 800 --overwrite \
+  --output "$out/tablet.quality.png"
+"$msii" render "$out/tablet.msii.ply" --show V_04 --colormap coolwarm --center 0.5 --pixels 800 --overwrite \
+  --output "$out/tablet.V_04.png"
+"$msii" render "$out/tablet.msii.ply" --show relief --pixels 800 --overwrite --output "$out/tablet.relief.png"
+"$msii" render "$out/tablet.msii.ply" --show relief --high-contrast --pixels 800 --overwrite \
+  --output "$out/tablet.relief-contrast.png"
+"$msii" render "$out/tablet.msii.ply" --show height --colormap cividis --isolines 8 --pixels 800 --overwrite \
+  --output "$out/tablet.height.png"
+"$msii" segment "$out/tablet.msii.ply" --threshold 0.55 --min-vertices 20 --overwrite \
+  --output "$out/tablet.segments.ply"
+"$msii" render "$out/tablet.segments.ply" --show label --colormap viridis --range 0,30 --shade --pixels 800 --overwrite \
+  --output "$out/tablet.segments.png"
+"$msii" outline "$out/tablet.msii.ply" --levels 0.55 --overwrite --output "$out/tablet.outline.svg"
+echo "msii demo: results in $out:"
+echo "  tablet.msii.ply (V_01..V_16, S_01..S_16, P_01..P_16, L_01..L_16, quality), tablet.msii.json,"
+echo "  tablet.map.exr (feature map), tablet.*.png (pictures), tablet.segments.ply/.csv, tablet.outline.svg"

@@ -13,6 +13,9 @@
 #include <msii/io/write_ply.h>
 #include <msii/mesh/read_mesh.h>
 #include <msii/samples/generators.h>
+#include <msii/map/feature_map.h>
+#include <msii/render/annotate.h>
+#include <msii/render/picture.h>
 
 #include <CLI/CLI.hpp>
 #include <sys/resource.h>
@@ -59,6 +62,9 @@ int main(int argc, char** argv)
     app.add_option("--voxel-size", voxel, "finest voxel (default automatic)");
     app.add_option("--runs", runs, "runs; medians are reported (default 3)");
     app.add_option("--invariants", invariants, "which invariants, e.g. V,S (default V,S,P,L)");
+    int mapPixels = 4096, picturePixels = 2048;
+    app.add_option("--map-pixels", mapPixels, "longer side of the EXR map, pixels (default 4096)");
+    app.add_option("--picture-pixels", picturePixels, "longer side of the PNG picture, pixels (default 2048)");
     CLI11_PARSE(app, argc, argv);
 
     samples::HeightFieldOptions ho;
@@ -165,6 +171,73 @@ int main(int argc, char** argv)
             (filter == SmoothingFilter::Mean ? ringMean : ringMedian).push_back(passes.seconds());
         }
     }
+    // Issue 5's stages: the EXR feature map (every feature and quality; default PIZ float,
+    // and the variants) and a PNG picture (rasterise, colour, shade, isolines, bars, write).
+    struct MapRow {
+        std::string name;
+        FeatureMapOptions options;
+        std::vector<double> seconds;
+        double megabytes = 0;
+    };
+    std::vector<MapRow> mapRows(3);
+    mapRows[0].name = "float, piz (default)";
+    mapRows[1].name = "float, none";
+    mapRows[1].options.compression = ExrCompression::None;
+    mapRows[2].name = "half, piz";
+    mapRows[2].options.half = true;
+    std::vector<double> pictureSeconds;
+    MapFrame mapFrame, pictureFrame;
+    {
+        fs::create_directories(dir);
+        MapFrameOptions fo;
+        fo.longerSidePixels = mapPixels;
+        mapFrame = makeMapFrame(lastMesh, fo);
+        fo.longerSidePixels = picturePixels;
+        pictureFrame = makeMapFrame(lastMesh, fo);
+        const std::string exr = (dir / "map.exr").string(), png = (dir / "picture.png").string();
+        for (int run = 0; run < runs; ++run) {
+            for (MapRow& m : mapRows) {
+                const Stopwatch t;
+                writeFeatureMap(exr, lastMesh, mapFrame, props, m.options);
+                m.seconds.push_back(t.seconds());
+                m.megabytes = double(fs::file_size(exr)) / 1e6;
+                fs::remove(exr);
+            }
+            const Stopwatch t;
+            const PixelHits hits = rasterize(lastMesh, pictureFrame);
+            const std::size_t np = hits.triangle.size();
+            std::vector<float> value(np), mask(np), n3[3];
+            const std::vector<Vec3> normals = vertexNormals(lastMesh);
+            std::vector<float> comp[3];
+            for (auto& c : comp) c.resize(nv);
+            for (std::size_t i = 0; i < nv; ++i) {
+                comp[0][i] = float(dot(normals[i], pictureFrame.axisU));
+                comp[1][i] = float(dot(normals[i], pictureFrame.axisV));
+                comp[2][i] = float(dot(normals[i], pictureFrame.normal));
+            }
+            for (auto& c : n3) c.resize(np);
+            for (std::size_t k = 0; k < np; ++k) {
+                value[k] = hits.interpolate(lastMesh, quality, k);
+                mask[k] = hits.triangle[k] != PixelHits::kNone ? 1.0f : 0.0f;
+                for (int a = 0; a < 3; ++a) n3[a][k] = hits.interpolate(lastMesh, comp[a], k);
+            }
+            PictureChannels pc;
+            pc.width = hits.width, pc.height = hits.height;
+            pc.value = &value, pc.mask = &mask, pc.nx = &n3[0], pc.ny = &n3[1], pc.nz = &n3[2];
+            PictureOptions po;
+            po.shade = true;
+            po.isolineCount = 5;
+            const PictureResult pic = renderPicture(pc, po);
+            FigureOptions fig;
+            fig.range = pic.range;
+            fig.isolines = pic.isolineLevels;
+            fig.pixelSize = pictureFrame.pixelSize;
+            writePng(png, composeFigure(pic.image, fig));
+            pictureSeconds.push_back(t.seconds());
+        }
+        fs::remove_all(dir);
+    }
+
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
     std::printf("msii-benchmark: tablet %.1f x %.1f mm, spacing %.3f mm, %zu vertices, R = %g, N = %d, "
@@ -172,9 +245,9 @@ int main(int argc, char** argv)
                 size, size, spacing, nv, radius, scales, invariants.c_str(), precision, last.voxelSize,
                 last.invariants.numLevels, runs);
     std::printf("machine: %s, %u hardware threads\n\n", cpuModel().c_str(), std::thread::hardware_concurrency());
-    std::printf("| %-38s | %8s |\n|%s|%s|\n", "stage", "seconds", std::string(40, '-').c_str(), std::string(10, '-').c_str());
+    std::printf("| %-62s | %8s |\n|%s|%s|\n", "stage", "seconds", std::string(64, '-').c_str(), std::string(10, '-').c_str());
     const auto row = [](const char* name, double value, const char* format) {
-        std::printf("| %-38s | ", name);
+        std::printf("| %-62s | ", name);
         std::printf(format, value);
         std::printf(" |\n");
     };
@@ -198,6 +271,15 @@ int main(int argc, char** argv)
     row("1-ring mean, 30 passes", median(ringMean), "%8.2f");
     row("1-ring set-up (median)", median(ringSetupMedian), "%8.2f");
     row("1-ring median, 30 passes", median(ringMedian), "%8.2f");
+    for (const MapRow& m : mapRows)
+        row(("EXR map " + std::to_string(mapFrame.width) + " x " + std::to_string(mapFrame.height) + ", " +
+             std::to_string(props.size() + 5) + " ch, " + m.name + ", " + std::to_string(int(m.megabytes)) + " MB")
+                .c_str(),
+            median(m.seconds), "%8.2f");
+    row(("PNG picture " + std::to_string(pictureFrame.width) + " x " + std::to_string(pictureFrame.height) +
+         " (shaded colour, isolines, bars)")
+            .c_str(),
+        median(pictureSeconds), "%8.2f");
     row("peak memory (MB)", usage.ru_maxrss / 1024.0, "%8.0f");
     return 0;
 }

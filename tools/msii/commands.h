@@ -23,5 +23,9 @@ std::function<int()> addSmoothCommand(CLI::App& app);
 std::function<int()> addMapCommand(CLI::App& app);
 /// Adds `msii render` (PNG pictures).
 std::function<int()> addRenderCommand(CLI::App& app);
+/// Adds `msii segment` (connected components of a thresholded value).
+std::function<int()> addSegmentCommand(CLI::App& app);
+/// Adds `msii outline` (isolines as SVG).
+std::function<int()> addOutlineCommand(CLI::App& app);
 
 } // namespace msii::tools

@@ -12,7 +12,7 @@ int main(int argc, char** argv)
 {
     CLI::App app{"msii: Multi-Scale Integral Invariants (volume, sphere area, patch area, line "
                  "length) per vertex of triangle meshes: 3D scans of tablets, seals, inscriptions "
-                 "and terrain; metrics of the feature vectors and 1-ring smoothing."};
+                 "and terrain; metrics of the feature vectors, 1-ring smoothing, EXR feature maps, pictures, components and outlines."};
     app.set_version_flag("--version", std::string("msii ") + msii::versionString());
     app.require_subcommand(1);
     auto runCompute = msii::tools::addComputeCommand(app);
@@ -20,6 +20,8 @@ int main(int argc, char** argv)
     auto runSmooth = msii::tools::addSmoothCommand(app);
     auto runMap = msii::tools::addMapCommand(app);
     auto runRender = msii::tools::addRenderCommand(app);
+    auto runSegment = msii::tools::addSegmentCommand(app);
+    auto runOutline = msii::tools::addOutlineCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::Success& e) {  // --help, --help-all, --version
@@ -34,6 +36,8 @@ int main(int argc, char** argv)
         if (app.got_subcommand("smooth")) return runSmooth();
         if (app.got_subcommand("map")) return runMap();
         if (app.got_subcommand("render")) return runRender();
+        if (app.got_subcommand("segment")) return runSegment();
+        if (app.got_subcommand("outline")) return runOutline();
     } catch (const std::bad_alloc&) {
         std::cerr << "msii: error: out of memory (try a larger --voxel-size)\n";
         return 1;

@@ -2,6 +2,7 @@
 
 #include <msii/core/errors.h>
 
+#include <cmath>
 #include <regex>
 
 namespace msii::tools {
@@ -12,10 +13,10 @@ void addViewOptions(CLI::App* cmd, ViewArgs& args, int defaultPixels)
                     "Projection: best (least-squares plane, default), +x, -x, +y, -y, +z, -z (seen "
                     "from that side) or a direction X,Y,Z from the object towards the viewer");
     cmd->add_flag("--flip", args.flip, "With --view best: look at the other side of the plane");
-    cmd->add_option("--pixels", args.pixels,
+    args.pixelsOption = cmd->add_option("--pixels", args.pixels,
                     "Longer image side in pixels (default " + std::to_string(defaultPixels) + ")");
-    cmd->add_option("--pixel-size", args.pixelSize, "Pixel size in mesh units (instead of --pixels)");
-    cmd->add_option("--dpi", args.dpi, "Dots per inch for meshes in mm (instead of --pixels)");
+    args.pixelSizeOption = cmd->add_option("--pixel-size", args.pixelSize, "Pixel size in mesh units (instead of --pixels)");
+    args.dpiOption = cmd->add_option("--dpi", args.dpi, "Dots per inch for meshes in mm (instead of --pixels)");
 }
 
 MapFrameOptions frameOptions(const ViewArgs& args, int defaultPixels)
@@ -23,13 +24,19 @@ MapFrameOptions frameOptions(const ViewArgs& args, int defaultPixels)
     MapFrameOptions o;
     parseMapView(args.view, o);
     o.flip = args.flip;
-    if (args.pixels < 0) throw InvalidInputError("--pixels must be positive");
-    if (args.pixelSize < 0) throw InvalidInputError("--pixel-size must be positive");
-    if (args.dpi < 0) throw InvalidInputError("--dpi must be positive");
-    o.longerSidePixels = args.pixels;
-    o.pixelSize = args.pixelSize;
-    o.dpi = args.dpi;
-    if (args.pixels == 0 && args.pixelSize == 0 && args.dpi == 0) o.longerSidePixels = defaultPixels;
+    const auto given = [](const CLI::Option* option) { return option && option->count() > 0; };
+    const int count = given(args.pixelsOption) + given(args.pixelSizeOption) + given(args.dpiOption);
+    if (count > 1) throw InvalidInputError("give only one of --pixels, --pixel-size and --dpi");
+    if (given(args.pixelsOption) && args.pixels <= 0)
+        throw InvalidInputError("--pixels must be positive, not " + std::to_string(args.pixels));
+    if (given(args.pixelSizeOption) && !(args.pixelSize > 0 && std::isfinite(args.pixelSize)))
+        throw InvalidInputError("--pixel-size must be a positive number");
+    if (given(args.dpiOption) && !(args.dpi > 0 && std::isfinite(args.dpi)))
+        throw InvalidInputError("--dpi must be a positive number");
+    o.longerSidePixels = given(args.pixelsOption) ? args.pixels : 0;
+    o.pixelSize = given(args.pixelSizeOption) ? args.pixelSize : 0;
+    o.dpi = given(args.dpiOption) ? args.dpi : 0;
+    if (count == 0) o.longerSidePixels = defaultPixels;
     return o;
 }
 

@@ -15,6 +15,8 @@ struct ViewArgs {
     bool flip = false;
     int pixels = 0;
     double pixelSize = 0, dpi = 0;
+    /// Whether each resolution option was given (a given 0 is an error, not "default").
+    CLI::Option *pixelsOption = nullptr, *pixelSizeOption = nullptr, *dpiOption = nullptr;
 };
 
 /// Adds --view, --flip, --pixels, --pixel-size and --dpi to @p cmd.

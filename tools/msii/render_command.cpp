@@ -85,16 +85,15 @@ std::string available(const std::vector<std::string>& names)
 
 Channels channelsFromMap(const std::string& path, const std::string& value, bool needNormals)
 {
-    FeatureMapImage map = readFeatureMap(path);
+    std::vector<std::string> wanted{"mask"};
+    if (!value.empty()) wanted.push_back(value);
+    if (needNormals) wanted.insert(wanted.end(), {"normal.x", "normal.y", "normal.z"});
+    FeatureMapImage map = readFeatureMap(path, wanted);
     Channels c;
     c.width = map.width, c.height = map.height;
     c.pixelSize = map.hasFrame ? map.frame.pixelSize : 0;
     if (!map.units.empty()) c.units = map.units;
-    std::vector<std::string> names;
-    for (const auto& kv : map.channels) names.push_back(kv.first);
-    std::vector<std::string> wanted{"mask"};
-    if (!value.empty()) wanted.push_back(value);
-    if (needNormals) wanted.insert(wanted.end(), {"normal.x", "normal.y", "normal.z"});
+    const std::vector<std::string>& names = map.channelNames;
     for (const std::string& w : wanted) {
         auto it = map.channels.find(w);
         if (it == map.channels.end()) {

@@ -20,6 +20,7 @@
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <filesystem>
@@ -226,7 +227,7 @@ FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, con
     return info;
 }
 
-FeatureMapImage readFeatureMap(const std::string& path)
+FeatureMapImage readFeatureMap(const std::string& path, const std::vector<std::string>& only)
 {
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) throw IOError("cannot read " + path + ": no such file");
@@ -240,6 +241,8 @@ FeatureMapImage readFeatureMap(const std::string& path)
         const std::size_t n = std::size_t(image.width) * std::size_t(image.height);
         Imf::FrameBuffer fb;
         for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
+            image.channelNames.push_back(it.name());
+            if (!only.empty() && std::find(only.begin(), only.end(), std::string(it.name())) == only.end()) continue;
             std::vector<float>& data = image.channels[it.name()];
             data.assign(n, 0.0f);
             char* base = reinterpret_cast<char*>(data.data()) -

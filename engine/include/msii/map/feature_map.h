@@ -63,15 +63,17 @@ FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, con
 struct FeatureMapImage {
     int width = 0, height = 0;
     std::map<std::string, std::vector<float>> channels;  ///< row-major, row 0 at the top
+    std::vector<std::string> channelNames;               ///< every channel of the file, read or not
     MapFrame frame;           ///< view, pixel size, axes and corner from the header
     bool hasFrame = false;    ///< the msii attributes were present
     std::string units, source, parameters;
     std::vector<double> radii;
 };
 
-/// Reads any scanline OpenEXR file (channels converted to float). Files without the msii
-/// attributes read with hasFrame = false.
+/// Reads any scanline OpenEXR file (channels converted to float): all channels, or only
+/// those of @p only that the file has (the caller checks for missing ones). Files without
+/// the msii attributes read with hasFrame = false.
 /// @throw IOError if the file is missing or not an OpenEXR file.
-FeatureMapImage readFeatureMap(const std::string& path);
+FeatureMapImage readFeatureMap(const std::string& path, const std::vector<std::string>& only = {});
 
 } // namespace msii

@@ -1,0 +1,229 @@
+/// `msii segment INPUT.ply --threshold T` and `msii outline INPUT.ply --levels …` (issue 5):
+/// connected components of a thresholded per-vertex value (labels and a table), and isolines
+/// as SVG outlines in the map plane, for tracing and drawing.
+#include "commands.h"
+#include "feature_input.h"
+#include "map_input.h"
+
+#include <msii/core/errors.h>
+#include <msii/core/stopwatch.h>
+#include <msii/core/version.h>
+#include <msii/io/atomic_file.h>
+#include <msii/io/write_ply.h>
+#include <msii/outline/isolines.h>
+#include <msii/render/colormap.h>
+#include <msii/segmentation/components.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <sstream>
+
+namespace msii::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const VertexProperty& findProperty(const FeatureMesh& in, const std::string& name)
+{
+    for (const auto& p : in.properties)
+        if (p.name == name) return p;
+    std::string present;
+    for (const auto& p : in.properties) present += (present.empty() ? "" : " ") + p.name;
+    throw InvalidInputError("the input has no vertex property '" + name + "' (it has: " +
+                            (present.empty() ? std::string("none") : present) + ")");
+}
+
+struct SegmentArgs {
+    std::string input, output, table;
+    std::vector<std::string> matFiles;
+    std::string property = "quality";
+    double threshold = NAN;
+    bool below = false;
+    long long minVertices = 1;
+    double minArea = 0;
+    int threads = 0;
+    bool quiet = false, overwrite = false;
+};
+
+int runSegment(const SegmentArgs& args)
+{
+    const Stopwatch total;
+    if (!std::isfinite(args.threshold)) throw InvalidInputError("--threshold must be a finite number");
+    if (args.minVertices < 1) throw InvalidInputError("--min-vertices must be at least 1");
+    if (!(args.minArea >= 0) || !std::isfinite(args.minArea)) throw InvalidInputError("--min-area must be 0 or more");
+    const std::string output = outputPath(args.input, args.output, "segments", args.overwrite);
+    std::string table = args.table;
+    if (table.empty()) table = (fs::path(output).parent_path() / (fs::path(output).stem().string() + ".csv")).string();
+    if (fs::path(table).extension() != ".csv") throw InvalidInputError("the table '" + table + "' must be a .csv file");
+    if (!args.overwrite && fs::exists(table))
+        throw IOError("'" + table + "' exists already (use --overwrite to replace it)");
+    checkWritable(table);
+    FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
+    const VertexProperty& f = findProperty(in, args.property);
+
+    ComponentOptions options;
+    options.threshold = args.threshold;
+    options.below = args.below;
+    options.minVertices = std::size_t(args.minVertices);
+    options.minArea = args.minArea;
+    const ComponentResult result = findComponents(in.mesh, f.values, options);
+
+    std::ostringstream csv;
+    csv.precision(9);
+    csv << "label,vertices,area,centroid_x,centroid_y,centroid_z,min_x,min_y,min_z,max_x,max_y,max_z\n";
+    for (const Component& c : result.components)
+        csv << c.label << ',' << c.vertices << ',' << c.area << ',' << c.centroid.x << ',' << c.centroid.y << ','
+            << c.centroid.z << ',' << c.boxMin.x << ',' << c.boxMin.y << ',' << c.boxMin.z << ',' << c.boxMax.x
+            << ',' << c.boxMax.y << ',' << c.boxMax.z << '\n';
+
+    VertexProperty label{"label", std::vector<float>(in.mesh.numVertices())};
+    for (std::size_t i = 0; i < label.values.size(); ++i) label.values[i] = float(result.label[i]);
+    for (auto it = in.properties.begin(); it != in.properties.end(); ++it)
+        if (it->name == "label") {
+            in.properties.erase(it);
+            break;
+        }
+    in.properties.push_back(std::move(label));
+    WritePlyOptions plyOptions;
+    std::ostringstream comment;
+    comment << "msii " << versionString() << " segment --property " << args.property << " --threshold "
+            << args.threshold << (args.below ? " --below" : "") << " --min-vertices " << args.minVertices
+            << " --min-area " << args.minArea << "; label = component (1 = largest area), 0 = none";
+    plyOptions.comments.push_back(comment.str());
+    writeTextFileAtomic(table, csv.str());
+    writePly(output, in.mesh, in.properties, plyOptions);
+    if (!args.quiet)
+        std::fprintf(stderr, "msii: %s -> %s, %s (%zu components, %zu smaller ones dropped, %.1f s)\n",
+                     args.input.c_str(), output.c_str(), table.c_str(), result.components.size(),
+                     result.droppedComponents, total.seconds());
+    return 0;
+}
+
+struct OutlineArgs {
+    std::string input, output;
+    std::vector<std::string> matFiles;
+    std::string property = "quality";
+    std::string levels, percentiles = "1,99";
+    int count = 0;
+    ViewArgs view;
+    std::string units = "mm";
+    int threads = 0;
+    bool quiet = false, overwrite = false;
+};
+
+int runOutline(const OutlineArgs& args)
+{
+    const Stopwatch total;
+    std::vector<double> levels;
+    if (!args.levels.empty()) {
+        std::stringstream list(args.levels);
+        std::string item;
+        while (std::getline(list, item, ',')) {
+            std::size_t used = 0;
+            double v = 0;
+            try {
+                v = std::stod(item, &used);
+            } catch (const std::exception&) {
+                used = 0;
+            }
+            if (used == 0 || used != item.size() || !std::isfinite(v))
+                throw InvalidInputError("--levels: '" + item + "' is not a number");
+            levels.push_back(v);
+        }
+    }
+    if (args.count < 0) throw InvalidInputError("--count must be 0 or more");
+    if (levels.empty() && args.count == 0) throw InvalidInputError("give --levels or --count");
+    const MapFrameOptions frameOpts = frameOptions(args.view, 1024);
+    const std::string output = outputPath(args.input, args.output, "outline", args.overwrite, ".svg");
+    FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
+    const VertexProperty& f = findProperty(in, args.property);
+    if (args.count > 0) {
+        std::stringstream p(args.percentiles);
+        double lo = 0, hi = 0;
+        char comma = 0;
+        if (!(p >> lo >> comma >> hi) || comma != ',') throw InvalidInputError("--percentiles takes LOW,HIGH");
+        const ValueRange r = percentileRange(f.values, lo, hi);
+        for (double l : evenLevels(r.lo, r.hi, args.count)) levels.push_back(l);
+    }
+    const MapFrame frame = makeMapFrame(in.mesh, frameOpts);
+    const std::vector<Polyline> lines = computeIsolines(in.mesh, f.values, levels);
+    std::vector<Polyline2> flat;
+    flat.reserve(lines.size());
+    for (const Polyline& l : lines) {
+        Polyline2 p{l.level, l.closed, {}};
+        p.points.reserve(l.points.size());
+        for (const Vec3& q : l.points) {
+            const Vec3 m = frame.toMap(q);
+            p.points.push_back({m.x, m.y});
+        }
+        flat.push_back(std::move(p));
+    }
+    SvgOptions svg;
+    svg.minX = frame.minU;
+    svg.width = frame.width * frame.pixelSize;
+    svg.height = frame.height * frame.pixelSize;
+    svg.minY = frame.maxV - svg.height;
+    svg.units = args.units;
+    writeSvg(output, flat, svg);
+    if (!args.quiet)
+        std::fprintf(stderr, "msii: %s -> %s (%zu lines at %zu levels, %.1f s)\n", args.input.c_str(),
+                     output.c_str(), flat.size(), levels.size(), total.seconds());
+    return 0;
+}
+
+} // namespace
+
+std::function<int()> addSegmentCommand(CLI::App& app)
+{
+    auto args = std::make_shared<SegmentArgs>();
+    CLI::App* cmd = app.add_subcommand(
+        "segment", "Connected components of the vertices whose value passes a threshold (e.g. the "
+                   "wedges of a tablet): a PLY with a per-vertex label (1 = largest) and a CSV table "
+                   "of the components (vertices, area, centroid, bounding box).");
+    cmd->add_option("input", args->input, "PLY with per-vertex values (e.g. from msii compute or metric)")->required();
+    cmd->add_option("-o,--output", args->output, "Output PLY (default <input stem>.segments.ply)");
+    cmd->add_option("--table", args->table, "Output CSV (default: the output PLY's name with .csv)");
+    cmd->add_option("--mat", args->matFiles, "GigaMesh feature file(s) for the input mesh");
+    cmd->add_option("--property", args->property, "Vertex property to threshold (default quality)");
+    cmd->add_option("--threshold", args->threshold, "Vertices with value >= this are selected")->required();
+    cmd->add_flag("--below", args->below, "Select value <= threshold instead");
+    cmd->add_option("--min-vertices", args->minVertices, "Drop components with fewer vertices (default 1)");
+    cmd->add_option("--min-area", args->minArea, "Drop components with less area, mesh units^2 (default 0)");
+    cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
+    cmd->add_flag("-q,--quiet", args->quiet, "No summary; errors only");
+    cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs");
+    return [args]() {
+        const auto limit = limitThreads(args->threads);
+        return runSegment(*args);
+    };
+}
+
+std::function<int()> addOutlineCommand(CLI::App& app)
+{
+    auto args = std::make_shared<OutlineArgs>();
+    CLI::App* cmd = app.add_subcommand(
+        "outline", "Isolines of a per-vertex value as SVG outlines in the map plane (mesh units), one "
+                   "path per line, for tracing and drawings.");
+    cmd->add_option("input", args->input, "PLY with per-vertex values")->required();
+    cmd->add_option("-o,--output", args->output, "Output SVG (default <input stem>.outline.svg)");
+    cmd->add_option("--mat", args->matFiles, "GigaMesh feature file(s) for the input mesh");
+    cmd->add_option("--property", args->property, "Vertex property (default quality)");
+    cmd->add_option("--levels", args->levels, "Isoline values, comma-separated");
+    cmd->add_option("--count", args->count, "Or: this many levels evenly inside the --percentiles range");
+    cmd->add_option("--percentiles", args->percentiles, "Range for --count (default 1,99)");
+    cmd->add_option("--view", args->view.view, "Projection as for msii map (default best)");
+    cmd->add_flag("--flip", args->view.flip, "With --view best: the other side");
+    cmd->add_option("--units", args->units, "Units of the mesh for the SVG size (default mm)");
+    cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
+    cmd->add_flag("-q,--quiet", args->quiet, "No summary; errors only");
+    cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output");
+    return [args]() {
+        const auto limit = limitThreads(args->threads);
+        return runOutline(*args);
+    };
+}
+
+} // namespace msii::tools
