@@ -23,6 +23,7 @@
 #include <cstring>
 #include <limits>
 #include <ostream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,15 @@ void PrintTo(const Vec3& v, std::ostream* os) { *os << "(" << v.x << ", " << v.y
 } // namespace msii
 
 namespace {
+
+/// A measured value for the XML report (--gtest_output=xml), not printed.
+void record(const std::string& key, double value)
+{
+    std::ostringstream s;
+    s.precision(3);
+    s << value;
+    ::testing::Test::RecordProperty(key, s.str());
+}
 
 /// An irregular flat patch over [0, w] × [0, h] at z = 0, triangles facing +z.
 TriMesh planeMesh(double w, double h, double spacing, std::uint64_t seed = 1)
@@ -136,6 +146,12 @@ struct TiltCase {
     Vec3 offset;
 };
 
+void PrintTo(const TiltCase& c, std::ostream* os)
+{
+    *os << c.w << " x " << c.h << " rotated by " << c.angle << " about (" << c.axis.x << ", " << c.axis.y << ", "
+        << c.axis.z << ")";
+}
+
 class BestFitRotatedPlane : public ::testing::TestWithParam<TiltCase> {};
 
 TEST_P(BestFitRotatedPlane, NormalAxesAndHeights)
@@ -155,7 +171,7 @@ TEST_P(BestFitRotatedPlane, NormalAxesAndHeights)
     // The patch faces +z before the rotation, so the frame faces rot(+z) (not its opposite).
     const Vec3 n = rot(Vec3(0, 0, 1));
     expectVecNear(f.normal, n, 1e-9, "normal");
-    RecordProperty("normalError", maxAbs(f.normal - n));
+    record("normalError", maxAbs(f.normal - n));
 
     // u along the longer side of the rectangle (either sign), v along the shorter one.
     const Vec3 longer = rot(c.w >= c.h ? Vec3(1, 0, 0) : Vec3(0, 1, 0));
@@ -168,8 +184,8 @@ TEST_P(BestFitRotatedPlane, NormalAxesAndHeights)
     double worst = 0;
     for (const Vec3& p : mesh.points) worst = std::max(worst, std::abs(f.toMap(p).z));
     EXPECT_LE(worst, 1e-9 * size);
-    RecordProperty("axisUError", std::abs(std::abs(dot(f.axisU, longer)) - 1));
-    RecordProperty("relativeHeight", worst / size);
+    record("axisUError", std::abs(std::abs(dot(f.axisU, longer)) - 1));
+    record("relativeHeight", worst / size);
 
     // 100 pixels along the longer side; the shorter side in proportion.
     EXPECT_EQ(std::max(f.width, f.height), 100);
@@ -207,8 +223,8 @@ TEST(BestFit, LinearHeightField)
     double worst = 0;
     for (const Vec3& p : mesh.points) worst = std::max(worst, std::abs(f.toMap(p).z));
     EXPECT_LE(worst, 1e-9 * 12);
-    RecordProperty("normalError", maxAbs(f.normal - normalized(Vec3(-a, -b, 1))));
-    RecordProperty("relativeHeight", worst / 12);
+    record("normalError", maxAbs(f.normal - normalized(Vec3(-a, -b, 1))));
+    record("relativeHeight", worst / 12);
     const Box2 box = projectedBox(mesh, f);
     EXPECT_GE(box.maxU - box.minU, box.maxV - box.minV);  // u along the longer extent
     EXPECT_GE(f.width, f.height);
@@ -552,7 +568,7 @@ TEST(Rasterize, PlaneFromAboveIsFullyCovered)
         int outside = 0;
         const double err = barycentricError(plane, f, hits, outside);
         EXPECT_LE(err, 1e-4) << view;
-        RecordProperty(std::string("baryError") + view, err);
+        record(std::string("baryError") + view, err);
         EXPECT_EQ(outside, 0) << view;
         for (float d : hits.depth) {
             if (!(d == 0)) {
@@ -582,14 +598,14 @@ TEST(Rasterize, RotatedPlaneBestFitHasNoGaps)
     const double err = barycentricError(mesh, f, hits, outside);
     EXPECT_LE(err, 1e-4);
     EXPECT_EQ(outside, 0);
-    RecordProperty("baryError", err);
-    RecordProperty("covered", int(hits.covered));
+    record("baryError", err);
+    record("covered", double(hits.covered));
     // The depth (height over the best-fit plane) is 0 on a flat patch.
     float worst = 0;
     for (std::size_t k = 0; k < hits.depth.size(); ++k)
         if (hits.triangle[k] != PixelHits::kNone) worst = std::max(worst, std::abs(hits.depth[k]));
     EXPECT_LE(worst, 1e-6f);
-    RecordProperty("depthWorst", worst);
+    record("depthWorst", worst);
 }
 
 TEST(Rasterize, CentresExactlyOnVerticesAndSharedEdges)
@@ -719,7 +735,7 @@ TEST(Rasterize, SphereDepthIsTheNearHemisphere)
             }
         EXPECT_EQ(missing, 0) << view;
         EXPECT_LE(worst, 0.02) << view;  // chords of 0.3 mm triangles: below 0.01 here
-        RecordProperty(std::string("depthError") + view, worst);
+        record(std::string("depthError") + view, worst);
     }
 }
 
@@ -756,7 +772,7 @@ TEST(Rasterize, VertexNormalsAndInterpolate)
     double worst = 0;
     for (const Vec3& m : vertexNormals(plane)) worst = std::max(worst, maxAbs(m - n));
     EXPECT_LE(worst, 1e-12);
-    RecordProperty("normalError", worst);
+    record("normalError", worst);
     // interpolate() of a linear field (x) gives the pixel centre's x.
     const MapFrame f = makeMapFrame(plane, viewOptions("+z", 0.05));
     const PixelHits hits = rasterize(plane, f);
@@ -768,7 +784,7 @@ TEST(Rasterize, VertexNormalsAndInterpolate)
         for (int x = 0; x < f.width; ++x)
             err = std::max(err, std::abs(double(hits.interpolate(plane, xs, hits.index(x, y))) - centreU(f, x)));
     EXPECT_LE(err, 1e-5);
-    RecordProperty("interpolateError", err);
+    record("interpolateError", err);
 }
 
 } // namespace

@@ -30,6 +30,7 @@ FeatureMesh readFeatureMesh(const std::string& input, const std::vector<std::str
     FeatureMesh out;
     out.mesh = std::move(read.mesh);
     out.properties = std::move(read.vertexProperties);
+    out.comments = std::move(read.comments);
     for (const std::string& mat : matFiles) {
         std::vector<VertexProperty> add = featurePropertiesFromMat(mat, out.mesh.numVertices());
         const char letter = add.front().name[0];

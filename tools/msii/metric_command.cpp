@@ -177,6 +177,7 @@ int runMetric(const MetricArgs& args)
     std::ostringstream comment;
     comment << "msii " << versionString() << " metric " << args.metrics << " of " << args.invariants
             << " against " << referenceText << "; quality = f_" << metrics.front().name;
+    options.comments = in.comments;  // keep the provenance (e.g. compute's R and N)
     options.comments.push_back(comment.str());
     writePly(output, in.mesh, in.properties, options);
     if (!args.quiet)

@@ -92,6 +92,7 @@ int runSegment(const SegmentArgs& args)
     comment << "msii " << versionString() << " segment --property " << args.property << " --threshold "
             << args.threshold << (args.below ? " --below" : "") << " --min-vertices " << args.minVertices
             << " --min-area " << args.minArea << "; label = component (1 = largest area), 0 = none";
+    plyOptions.comments = in.comments;  // keep the provenance (e.g. compute's R and N)
     plyOptions.comments.push_back(comment.str());
     writeTextFileAtomic(table, csv.str());
     writePly(output, in.mesh, in.properties, plyOptions);

@@ -108,6 +108,7 @@ int runSmooth(const SmoothArgs& args)
     comment << "msii " << versionString() << " smooth --filter " << args.filter << " --iterations "
             << args.iterations << " --delta " << args.delta << " (delta " << info.globalDelta
             << ") --weights " << args.weights << " --border " << args.border;
+    plyOptions.comments = in.comments;  // keep the provenance (e.g. compute's R and N)
     plyOptions.comments.push_back(comment.str());
     writePly(output, in.mesh, in.properties, plyOptions);
     if (!args.quiet)

@@ -271,6 +271,20 @@ FeatureMapImage readFeatureMap(const std::string& path, const std::vector<std::s
             image.frame.width = image.width;
             image.frame.height = image.height;
         }
+        if (const auto* a = header.findTypedAttribute<Imf::StringAttribute>("msii:view")) {
+            // Written by mapViewName: "best-fit plane", "+x" ... or "direction X,Y,Z".
+            const std::string& name = a->value();
+            if (name.rfind("direction", 0) == 0) {
+                image.frame.view = MapView::Direction;
+            } else if (name != "best-fit plane") {
+                MapFrameOptions parsed;
+                try {
+                    parseMapView(name, parsed);
+                    image.frame.view = parsed.view;
+                } catch (const InvalidInputError&) {
+                }
+            }
+        }
         if (const auto* a = header.findTypedAttribute<Imf::StringAttribute>("msii:units")) image.units = a->value();
         if (const auto* a = header.findTypedAttribute<Imf::StringAttribute>("msii:source")) image.source = a->value();
         if (const auto* a = header.findTypedAttribute<Imf::StringAttribute>("msii:parameters")) image.parameters = a->value();

@@ -170,6 +170,7 @@ struct PlyHeader {
     PlyFormat format = PlyFormat::Ascii;
     std::vector<PlyElement> elements;
     std::size_t dataOffset = 0;  ///< first byte after the end_header line
+    std::vector<std::string> comments;
 };
 
 PlyHeader parseHeader(const std::string& path, const char* data, std::size_t size)
@@ -204,7 +205,13 @@ PlyHeader parseHeader(const std::string& path, const char* data, std::size_t siz
         std::istringstream words(line);
         std::string keyword;
         if (!(words >> keyword)) continue;  // blank line
-        if (keyword == "comment" || keyword == "obj_info") continue;
+        if (keyword == "comment") {
+            std::string text;
+            std::getline(words >> std::ws, text);
+            header.comments.push_back(text);
+            continue;
+        }
+        if (keyword == "obj_info") continue;
         if (keyword == "end_header") {
             if (!newline) throw invalid("ends without a newline after end_header");
             break;
@@ -833,6 +840,7 @@ ReadMeshResult readPly(const std::string& path, const ReadMeshOptions& options)
         throw InvalidInputError("'" + path + "' has more vertices than msii supports (2^32 - 1).");
 
     ReadMeshResult result;
+    result.comments = header.comments;
     ReadContext context;
     context.path = &path;
     const char* begin = file.data() + header.dataOffset;

@@ -31,6 +31,7 @@ struct ReadMeshResult {
     std::string format;                          ///< "ply-binary", "ply-ascii", "obj", "off", "stl"
     std::size_t numPolygonsRead = 0;             ///< faces/strips as found in the file
     std::vector<VertexProperty> vertexProperties; ///< only with keepVertexProperties/keepVertexLists
+    std::vector<std::string> comments;           ///< PLY header comments (e.g. msii's parameters)
 };
 
 /// Reads a triangle mesh; the format is chosen by the file extension (case-insensitive).
