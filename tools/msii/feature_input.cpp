@@ -7,7 +7,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <filesystem>
+#include <sstream>
 
 namespace fs = std::filesystem;
 
@@ -39,6 +41,47 @@ FeatureMesh readFeatureMesh(const std::string& input, const std::vector<std::str
                                             [&](const VertexProperty& p) { return isFeatureOf(p.name, letter); }),
                              out.properties.end());
         mergeProperties(out.properties, std::move(add));
+    }
+    return out;
+}
+
+std::size_t findProperty(const FeatureMesh& in, const std::string& name)
+{
+    for (std::size_t k = 0; k < in.properties.size(); ++k)
+        if (in.properties[k].name == name) return k;
+    std::string present;
+    for (const auto& p : in.properties) present += (present.empty() ? "" : " ") + p.name;
+    throw InvalidInputError("the input has no vertex property '" + name + "' (it has: " +
+                            (present.empty() ? std::string("none") : present) + ")");
+}
+
+std::vector<std::size_t> findProperties(const FeatureMesh& in, const std::string& commaList)
+{
+    std::vector<std::size_t> out;
+    std::stringstream list(commaList);
+    std::string name;
+    while (std::getline(list, name, ','))
+        if (!name.empty()) out.push_back(findProperty(in, name));
+    if (out.empty()) throw InvalidInputError("--properties names no property");
+    return out;
+}
+
+std::vector<double> parseNumberList(const std::string& text, const std::string& option)
+{
+    std::vector<double> out;
+    std::stringstream list(text);
+    std::string item;
+    while (std::getline(list, item, ',')) {
+        std::size_t used = 0;
+        double v = 0;
+        try {
+            v = std::stod(item, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used == 0 || used != item.size() || !std::isfinite(v))
+            throw InvalidInputError(option + ": '" + item + "' is not a number");
+        out.push_back(v);
     }
     return out;
 }

@@ -18,6 +18,17 @@ struct FeatureMesh {
 /// features by those of each GigaMesh `.mat` file in @p matFiles.
 FeatureMesh readFeatureMesh(const std::string& input, const std::vector<std::string>& matFiles);
 
+/// The index of vertex property @p name in @p in.properties.
+/// @throw InvalidInputError naming the properties the input has.
+std::size_t findProperty(const FeatureMesh& in, const std::string& name);
+
+/// The properties named in a comma-separated list, in its order (indices into in.properties).
+/// @throw InvalidInputError for a name the input lacks, or an empty list.
+std::vector<std::size_t> findProperties(const FeatureMesh& in, const std::string& commaList);
+
+/// Comma-separated finite numbers ("0.5,0.6"). @throw InvalidInputError naming @p option.
+std::vector<double> parseNumberList(const std::string& text, const std::string& option);
+
 /// --output, else <input folder>/<input stem>.<suffix><extension>; checks that it may be
 /// written and has the extension.
 std::string outputPath(const std::string& input, const std::string& output, const std::string& suffix,

@@ -46,24 +46,9 @@ int runMap(const MapArgs& args)
     FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
 
     std::vector<VertexProperty> chosen;
-    if (args.properties.empty()) {
-        chosen = std::move(in.properties);
-    } else {
-        std::stringstream list(args.properties);
-        std::string name;
-        while (std::getline(list, name, ',')) {
-            if (name.empty()) continue;
-            auto it = std::find_if(in.properties.begin(), in.properties.end(),
-                                   [&](const VertexProperty& p) { return p.name == name; });
-            if (it == in.properties.end()) {
-                std::string present;
-                for (const auto& p : in.properties) present += (present.empty() ? "" : " ") + p.name;
-                throw InvalidInputError("the input has no vertex property '" + name + "' (it has: " +
-                                        (present.empty() ? std::string("none") : present) + ")");
-            }
-            chosen.push_back(*it);
-        }
-    }
+    if (args.properties.empty()) chosen = std::move(in.properties);
+    else
+        for (std::size_t k : findProperties(in, args.properties)) chosen.push_back(in.properties[k]);
     // Names the map reserves for its own channels.
     for (VertexProperty& p : chosen)
         if (p.name == "height" || p.name == "mask" || p.name.rfind("normal.", 0) == 0) p.name = "input." + p.name;

@@ -48,26 +48,6 @@ struct RenderArgs {
 
 constexpr int kDefaultPixels = 2048;
 
-std::vector<double> parseNumbers(const std::string& text, const char* option)
-{
-    std::vector<double> out;
-    std::stringstream list(text);
-    std::string item;
-    while (std::getline(list, item, ',')) {
-        std::size_t used = 0;
-        double v = 0;
-        try {
-            v = std::stod(item, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (used == 0 || used != item.size() || !std::isfinite(v))
-            throw InvalidInputError(std::string(option) + ": '" + item + "' is not a number");
-        out.push_back(v);
-    }
-    return out;
-}
-
 /// The channels of the picture, from an EXR map or a rasterised mesh.
 struct Channels {
     int width = 0, height = 0;
@@ -111,15 +91,7 @@ Channels channelsFromMesh(const std::string& path, const std::vector<std::string
     const MapFrameOptions frameOpts = frameOptions(view, kDefaultPixels);
     FeatureMesh in = readFeatureMesh(path, matFiles);
     const VertexProperty* property = nullptr;
-    if (!value.empty() && value != "height") {
-        for (const auto& p : in.properties)
-            if (p.name == value) property = &p;
-        if (!property) {
-            std::vector<std::string> names;
-            for (const auto& p : in.properties) names.push_back(p.name);
-            throw InvalidInputError("the input has no vertex property '" + value + "' (it has: " + available(names) + ")");
-        }
-    }
+    if (!value.empty() && value != "height") property = &in.properties[findProperty(in, value)];
     const MapFrame frame = makeMapFrame(in.mesh, frameOpts);
     const PixelHits hits = rasterize(in.mesh, frame, progress);
     Channels c;
@@ -162,7 +134,7 @@ int runRender(const RenderArgs& args)
     std::string show = args.show;
     PictureOptions options;
     if (!args.colorMap.empty()) options.colorMap = parseColorMap(args.colorMap);
-    const std::vector<double> light = parseNumbers(args.light, "--light");
+    const std::vector<double> light = parseNumberList(args.light, "--light");
     if (light.size() != 2) throw InvalidInputError("--light takes AZIMUTH,ELEVATION in degrees");
     // --light uses the map-makers' convention (azimuth clockwise from up, where the light
     // comes from); ShadingOptions measures the direction of travel counter-clockwise from +x.
@@ -173,14 +145,14 @@ int runRender(const RenderArgs& args)
     options.shadeStrength = args.shadeStrength;
     if (args.isolines < 0) throw InvalidInputError("--isolines must be 0 or more");
     options.isolineCount = args.isolines;
-    if (!args.levels.empty()) options.isolineLevels = parseNumbers(args.levels, "--levels");
+    if (!args.levels.empty()) options.isolineLevels = parseNumberList(args.levels, "--levels");
     if (!args.range.empty()) {
-        const auto r = parseNumbers(args.range, "--range");
+        const auto r = parseNumberList(args.range, "--range");
         if (r.size() != 2 || !(r[0] < r[1])) throw InvalidInputError("--range takes LOW,HIGH with LOW < HIGH");
         options.fixedRange = true;
         options.range = {r[0], r[1]};
     } else {
-        const auto p = parseNumbers(args.percentiles, "--percentiles");
+        const auto p = parseNumberList(args.percentiles, "--percentiles");
         if (p.size() != 2) throw InvalidInputError("--percentiles takes LOW,HIGH (0 to 100)");
         options.loPercentile = p[0], options.hiPercentile = p[1];
     }

@@ -26,16 +26,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const VertexProperty& findProperty(const FeatureMesh& in, const std::string& name)
-{
-    for (const auto& p : in.properties)
-        if (p.name == name) return p;
-    std::string present;
-    for (const auto& p : in.properties) present += (present.empty() ? "" : " ") + p.name;
-    throw InvalidInputError("the input has no vertex property '" + name + "' (it has: " +
-                            (present.empty() ? std::string("none") : present) + ")");
-}
-
 struct SegmentArgs {
     std::string input, output, table;
     std::vector<std::string> matFiles;
@@ -62,7 +52,7 @@ int runSegment(const SegmentArgs& args)
         throw IOError("'" + table + "' exists already (use --overwrite to replace it)");
     checkWritable(table);
     FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
-    const VertexProperty& f = findProperty(in, args.property);
+    const VertexProperty& f = in.properties[findProperty(in, args.property)];
 
     ComponentOptions options;
     options.threshold = args.threshold;
@@ -119,28 +109,13 @@ int runOutline(const OutlineArgs& args)
 {
     const Stopwatch total;
     std::vector<double> levels;
-    if (!args.levels.empty()) {
-        std::stringstream list(args.levels);
-        std::string item;
-        while (std::getline(list, item, ',')) {
-            std::size_t used = 0;
-            double v = 0;
-            try {
-                v = std::stod(item, &used);
-            } catch (const std::exception&) {
-                used = 0;
-            }
-            if (used == 0 || used != item.size() || !std::isfinite(v))
-                throw InvalidInputError("--levels: '" + item + "' is not a number");
-            levels.push_back(v);
-        }
-    }
+    if (!args.levels.empty()) levels = parseNumberList(args.levels, "--levels");
     if (args.count < 0) throw InvalidInputError("--count must be 0 or more");
     if (levels.empty() && args.count == 0) throw InvalidInputError("give --levels or --count");
     const MapFrameOptions frameOpts = frameOptions(args.view, 1024);
     const std::string output = outputPath(args.input, args.output, "outline", args.overwrite, ".svg");
     FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
-    const VertexProperty& f = findProperty(in, args.property);
+    const VertexProperty& f = in.properties[findProperty(in, args.property)];
     if (args.count > 0) {
         std::stringstream p(args.percentiles);
         double lo = 0, hi = 0;

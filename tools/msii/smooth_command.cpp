@@ -75,21 +75,7 @@ int runSmooth(const SmoothArgs& args)
             if (isFeatureName(in.properties[k].name) || in.properties[k].name == "quality") chosen.push_back(k);
         if (chosen.empty()) throw InvalidInputError("the input has no features (V_01 ...) and no quality to smooth");
     } else {
-        std::stringstream list(args.properties);
-        std::string name;
-        while (std::getline(list, name, ',')) {
-            if (name.empty()) continue;
-            const auto it = std::find_if(in.properties.begin(), in.properties.end(),
-                                         [&](const VertexProperty& p) { return p.name == name; });
-            if (it == in.properties.end()) {
-                std::string present;
-                for (const auto& p : in.properties) present += (present.empty() ? "" : " ") + p.name;
-                throw InvalidInputError("the input has no vertex property '" + name + "' (it has: " +
-                                        (present.empty() ? std::string("none") : present) + ")");
-            }
-            chosen.push_back(std::size_t(it - in.properties.begin()));
-        }
-        if (chosen.empty()) throw InvalidInputError("--properties names no property");
+        chosen = findProperties(in, args.properties);
     }
 
     RingSmoother smoother(in.mesh, options);
