@@ -358,3 +358,68 @@ TEST(MsiiCli, MetricAndSmoothBadInputFailCleanly)
     expectCleanFailureOf("smooth", f + " --properties height", "no vertex property 'height'");
     expectCleanFailureOf("smooth", "'" + smallPatch() + "' --all-features", "no features");
 }
+
+namespace {
+/// The "status" of each line of a JSON-lines manifest, in order.
+std::vector<std::string> manifestStatuses(const fs::path& path)
+{
+    std::vector<std::string> out;
+    std::stringstream in(readFile(path.string()));
+    for (std::string line; std::getline(in, line);) {
+        const auto at = line.find("\"status\":\"");
+        out.push_back(at == std::string::npos ? "?" : line.substr(at + 10, line.find('"', at + 10) - at - 10));
+    }
+    return out;
+}
+} // namespace
+
+// A folder as a collection (issue 6): good and broken files, the rest goes on after a
+// failure, finished outputs are skipped on a rerun, an interrupted output (no JSON record)
+// is redone, the manifest records each input, and the exit status says whether any failed.
+TEST(MsiiCli, ComputeCollectionSkipsResumesAndReports)
+{
+    const fs::path in = tempDir() / "collection", out = tempDir() / "collection-out";
+    fs::create_directories(in);
+    fs::copy_file(smallPatch(), in / "a.ply", fs::copy_options::overwrite_existing);
+    fs::copy_file(smallPatch(), in / "b.ply", fs::copy_options::overwrite_existing);
+    writeFile((in / "c.off").string(), "OFF\n0 0 0\n");         // broken
+    writeFile((in / "notes.txt").string(), "not a mesh\n");      // ignored
+    const std::string run = "compute '" + in.string() + "' -r 0.8 -n 4 -q --output-dir '" + out.string() + "'";
+    const fs::path manifest = out / "msii-manifest.jsonl";
+
+    RunResult r = runMsii(run);
+    EXPECT_EQ(r.code, 1) << r.err;  // c.off failed
+    EXPECT_NE(r.err.find("c.off"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("2 done, 0 skipped (outputs exist), 1 failed"), std::string::npos) << r.err;
+    EXPECT_TRUE(fs::exists(out / "a.msii.ply") && fs::exists(out / "b.msii.json"));
+    EXPECT_FALSE(fs::exists(out / "c.msii.ply"));
+    EXPECT_EQ(manifestStatuses(manifest), (std::vector<std::string>{"done", "done", "failed"}));
+
+    // Rerun: both finished outputs are skipped (and kept as they were).
+    const auto written = fs::last_write_time(out / "a.msii.ply");
+    r = runMsii(run);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("0 done, 2 skipped"), std::string::npos) << r.err;
+    EXPECT_EQ(fs::last_write_time(out / "a.msii.ply"), written);
+
+    // An interrupted run left b's PLY without its JSON record: it is redone; without the
+    // broken file the collection succeeds.
+    fs::remove(out / "b.msii.json");
+    fs::remove(in / "c.off");
+    r = runMsii(run);
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_TRUE(fs::exists(out / "b.msii.json"));
+    const auto statuses = manifestStatuses(manifest);
+    ASSERT_EQ(statuses.size(), 8u);
+    EXPECT_EQ(std::vector<std::string>(statuses.end() - 2, statuses.end()),
+              (std::vector<std::string>{"skipped", "done"}));
+    EXPECT_NE(readFile(manifest.string()).find("\"radius\":0.8"), std::string::npos);
+
+    // A folder without meshes: one clear error, nothing written.
+    fs::create_directories(tempDir() / "no-meshes");
+    writeFile((tempDir() / "no-meshes" / "readme.txt").string(), "x\n");
+    r = runMsii("compute '" + (tempDir() / "no-meshes").string() + "' -r 1");
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("has no mesh files"), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+}

@@ -18,6 +18,8 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <cctype>
+#include <ctime>
 #include <iomanip>
 #include <cmath>
 #include <cstdio>
@@ -47,6 +49,14 @@ struct ComputeArgs {
     std::size_t randomVertices = 0;
     std::uint64_t seed = 1;
     bool gigamesh = false;
+    std::string manifest;       // JSON lines; default for collections: <output folder>/msii-manifest.jsonl
+    bool recursive = false;     // folders: also their subfolders
+};
+
+/// What one input gave, for the summary and the manifest.
+struct OneResult {
+    std::size_t vertices = 0;
+    double voxelSize = 0, seconds = 0;
 };
 
 struct Selection {
@@ -175,7 +185,7 @@ std::string radiusHint(const std::string& input)
     }
 }
 
-void computeOne(const ComputeArgs& args, const std::string& input, const std::string& output)
+OneResult computeOne(const ComputeArgs& args, const std::string& input, const std::string& output)
 {
     const Stopwatch total;
     const std::string sidecar = sidecarPathFor(output);
@@ -337,6 +347,91 @@ void computeOne(const ComputeArgs& args, const std::string& input, const std::st
         std::fprintf(stderr, "msii: %s -> %s (%zu vertices, %.1f s)\n", input.c_str(),
                      output.c_str(), st.numVertices,
                      total.seconds());
+    return {st.numVertices, result.voxelSize, total.seconds()};
+}
+
+/// Mesh files msii reads, by extension (case-insensitive).
+bool isMeshFile(const fs::path& p)
+{
+    std::string ext = p.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl") return false;
+    // Not msii's own outputs (a rerun into the input folder must not take them as inputs).
+    const std::string stem = p.stem().string();
+    for (const char* suffix : {".msii", ".gigamesh", ".metric", ".smooth", ".segments"}) {
+        const std::string s(suffix);
+        if (stem.size() > s.size() && stem.compare(stem.size() - s.size(), s.size(), s) == 0) return false;
+    }
+    return p.filename().string().front() != '.';  // nor hidden or temporary files
+}
+
+/// The inputs with folders replaced by the mesh files in them (sorted; subfolders with
+/// --recursive). @throw InvalidInputError for a folder without mesh files.
+std::vector<std::string> expandInputs(const ComputeArgs& args, bool& collection)
+{
+    std::vector<std::string> out;
+    collection = args.inputs.size() > 1;
+    for (const std::string& input : args.inputs) {
+        std::error_code ec;
+        if (!fs::is_directory(input, ec)) {
+            out.push_back(input);
+            continue;
+        }
+        collection = true;
+        std::vector<std::string> found;
+        const auto visit = [&](const fs::directory_entry& e) {
+            std::error_code fec;
+            if (e.is_regular_file(fec) && isMeshFile(e.path())) found.push_back(e.path().string());
+        };
+        if (args.recursive)
+            for (const auto& e : fs::recursive_directory_iterator(input, fs::directory_options::skip_permission_denied, ec)) visit(e);
+        else
+            for (const auto& e : fs::directory_iterator(input, ec)) visit(e);
+        if (ec) throw IOError("cannot read the folder " + input + ": " + ec.message());
+        if (found.empty())
+            throw InvalidInputError("the folder " + input + " has no mesh files (.ply, .obj, .off, .stl)" +
+                                    (args.recursive ? "" : "; --recursive looks into subfolders"));
+        std::sort(found.begin(), found.end());
+        out.insert(out.end(), found.begin(), found.end());
+    }
+    return out;
+}
+
+/// Appends one JSON line per input to the manifest, flushed at once, so an interrupted run
+/// keeps the lines of what it finished.
+class Manifest {
+public:
+    explicit Manifest(const std::string& path) : mPath(path)
+    {
+        if (path.empty()) return;
+        mFile = std::fopen(path.c_str(), "a");
+        if (!mFile) throw IOError("cannot write the manifest " + path);
+    }
+    ~Manifest()
+    {
+        if (mFile) std::fclose(mFile);
+    }
+    Manifest(const Manifest&) = delete;
+    Manifest& operator=(const Manifest&) = delete;
+    void add(const nlohmann::json& line)
+    {
+        if (!mFile) return;
+        const std::string text = line.dump() + "\n";
+        if (std::fwrite(text.data(), 1, text.size(), mFile) != text.size() || std::fflush(mFile) != 0)
+            throw IOError("cannot write the manifest " + mPath);
+    }
+
+private:
+    std::string mPath;
+    std::FILE* mFile = nullptr;
+};
+
+std::string nowUtc()
+{
+    const std::time_t t = std::time(nullptr);
+    char buffer[32];
+    std::strftime(buffer, sizeof buffer, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+    return buffer;
 }
 
 } // namespace
@@ -356,12 +451,20 @@ std::function<int()> addComputeCommand(CLI::App& app)
         "compute", "Compute the integral invariants V (volume), S (sphere area), P (patch "
                    "area) and L (line length) at N radii for every vertex; writes a PLY with "
                    "V_01..V_NN, S_.., P_.., L_.. and quality, and a JSON record next to it.");
-    cmd->add_option("inputs", args->inputs, "Mesh files (PLY, OBJ, OFF, STL)")->required();
+    cmd->add_option("inputs", args->inputs,
+                    "Mesh files (PLY, OBJ, OFF, STL) or folders of them; several inputs or a folder "
+                    "make a collection: finished outputs are skipped, failures reported, a manifest "
+                    "written")
+        ->required();
     cmd->add_option("-r,--radius", args->radius,
                     "Largest radius R in mesh units (usually mm): about the size of the largest "
                     "feature to detect. Radii are r_j = j*R/N.");
     cmd->add_option("-n,--scales", args->scales, "Number of radii N (default 16)");
     cmd->add_option("-o,--output", args->output, "Output PLY (one input only)");
+    cmd->add_option("--manifest", args->manifest,
+                    "Collections: JSON-lines record of each input (appended; default "
+                    "<output folder>/msii-manifest.jsonl)");
+    cmd->add_flag("--recursive", args->recursive, "Folders: include their subfolders");
     cmd->add_option("--output-dir", args->outputDir,
                     "Folder for the outputs <name>.msii.ply (default: next to each input)");
     cmd->add_option("--voxel-size", args->voxelSize,
@@ -396,22 +499,85 @@ std::function<int()> addComputeCommand(CLI::App& app)
                 throw InvalidInputError("the radius must be a positive number");
             throw InvalidInputError("--radius is required" + radiusHint(args->inputs.front()));
         }
-        if (!args->output.empty() && args->inputs.size() > 1)
-            throw InvalidInputError("--output takes one input; use --output-dir for several");
         const auto limit = limitThreads(args->threads);
-        int failures = 0;
-        for (const auto& input : args->inputs) {
-            try {
-                computeOne(*args, input, outputPathFor(*args, input));
-            } catch (const Error& e) {
-                if (args->inputs.size() == 1) throw;
-                std::fprintf(stderr, "msii: error: %s\n", e.what());
-                ++failures;
-            }
+        bool collection = false;
+        const std::vector<std::string> inputs = expandInputs(*args, collection);
+        if (!args->output.empty() && inputs.size() > 1)
+            throw InvalidInputError("--output takes one input; use --output-dir for several");
+        if (!collection) {
+            computeOne(*args, inputs.front(), outputPathFor(*args, inputs.front()));
+            return 0;
         }
-        if (failures > 0 && !args->quiet)
-            std::fprintf(stderr, "msii: %d of %zu inputs failed\n", failures, args->inputs.size());
-        return failures > 0 ? 1 : 0;
+        // A collection: each input on its own; a failure is reported and the rest go on;
+        // finished outputs are skipped unless --overwrite, so an interrupted run resumes.
+        if (!args->outputDir.empty()) {
+            std::error_code ec;
+            fs::create_directories(args->outputDir, ec);
+            if (ec) throw IOError("cannot create the output folder " + args->outputDir + ": " + ec.message());
+        }
+        std::string manifestPath = args->manifest;
+        if (manifestPath.empty())
+            manifestPath = ((args->outputDir.empty() ? fs::path(outputPathFor(*args, inputs.front())).parent_path()
+                                                     : fs::path(args->outputDir)) /
+                            "msii-manifest.jsonl")
+                               .string();
+        Manifest manifest(manifestPath);
+        const Stopwatch all;
+        const nlohmann::json parameters = {{"radius", args->radius},       {"scales", args->scales},
+                                           {"precision", args->precision}, {"voxel_size", args->voxelSize},
+                                           {"invariants", args->invariants}, {"exact", args->exact},
+                                           {"repair", args->repair}};
+        std::size_t done = 0, skipped = 0;
+        std::vector<std::string> failed;
+        const bool terminal = !args->quiet && Progress::stderrIsTerminal();
+        for (std::size_t k = 0; k < inputs.size(); ++k) {
+            const std::string& input = inputs[k];
+            const std::string output = outputPathFor(*args, input);
+            if (terminal)
+                std::fprintf(stderr, "msii: [%zu/%zu] %s (%zu done, %zu skipped, %zu failed, %.0f s)\n", k + 1,
+                             inputs.size(), input.c_str(), done, skipped, failed.size(), all.seconds());
+            nlohmann::json line = {{"input", fs::absolute(input).string()},
+                                   {"output", fs::absolute(output).string()},
+                                   {"parameters", parameters},
+                                   {"version", versionString()},
+                                   {"time", nowUtc()}};
+            std::error_code ec;
+            if (!args->overwrite && fs::exists(output, ec) && fs::exists(sidecarPathFor(output), ec)) {
+                ++skipped;
+                line["status"] = "skipped";
+                line["reason"] = "output exists (--overwrite replaces it)";
+                manifest.add(line);
+                continue;
+            }
+            try {
+                // An output without its JSON record is from an interrupted run: redo it.
+                ComputeArgs redo = *args;
+                redo.overwrite = args->overwrite || !fs::exists(sidecarPathFor(output), ec);
+                const OneResult r = computeOne(redo, input, output);
+                ++done;
+                line["status"] = "done";
+                line["vertices"] = r.vertices;
+                line["voxel_size"] = r.voxelSize;
+                line["seconds"] = r.seconds;
+            } catch (const std::bad_alloc&) {
+                failed.push_back(input);
+                std::fprintf(stderr, "msii: error: %s: out of memory (try a larger --voxel-size)\n", input.c_str());
+                line["status"] = "failed";
+                line["error"] = "out of memory";
+            } catch (const Error& e) {
+                failed.push_back(input);
+                std::fprintf(stderr, "msii: error: %s: %s\n", input.c_str(), e.what());
+                line["status"] = "failed";
+                line["error"] = e.what();
+            }
+            manifest.add(line);
+        }
+        if (!args->quiet || !failed.empty()) {
+            std::fprintf(stderr, "msii: %zu inputs: %zu done, %zu skipped (outputs exist), %zu failed, %.1f s; manifest %s\n",
+                         inputs.size(), done, skipped, failed.size(), all.seconds(), manifestPath.c_str());
+            for (const std::string& f : failed) std::fprintf(stderr, "msii: failed: %s\n", f.c_str());
+        }
+        return failed.empty() ? 0 : 1;
     };
 }
 
