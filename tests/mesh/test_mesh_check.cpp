@@ -141,7 +141,25 @@ TEST(MeshCheck, NonManifoldEdge)
     EXPECT_EQ(r.numNonManifoldEdges, 1u);
     EXPECT_EQ(r.numBorderEdges, 6u);
     EXPECT_FALSE(r.closed);
-    EXPECT_EQ(r.firstProblem(), "the mesh has 1 non-manifold edge (shared by more than two faces)");
+    EXPECT_EQ(r.firstProblem(), "the mesh has 1 non-manifold edge (shared by more than two faces); "
+                                "use --repair to drop the faces around them");
+}
+
+// --repair: the faces around non-manifold edges go, the others stay (in order), and the
+// rest is a valid open mesh.
+TEST(MeshCheck, RemoveNonManifoldFaces)
+{
+    TriMesh mesh;
+    mesh.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {1, 1, 0}, {2, 0, 0}};
+    // Three faces on edge 0-1, and two good faces beyond: 1-5-2 and 1-6-5.
+    mesh.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}, {1, 5, 2}, {1, 6, 5}};
+    EXPECT_EQ(removeNonManifoldFaces(mesh), 3u);
+    EXPECT_EQ(mesh.triangles, (std::vector<Triangle>{{1, 5, 2}, {1, 6, 5}}));
+    const MeshCheckResult r = checkMesh(mesh);
+    EXPECT_EQ(r.numNonManifoldEdges, 0u);
+    EXPECT_EQ(r.firstProblem(), "");
+    EXPECT_EQ(r.numBorderEdges, 4u);
+    EXPECT_EQ(removeNonManifoldFaces(mesh), 0u);  // nothing left to remove
 }
 
 TEST(MeshCheck, FlippedFaceGivesInconsistentEdges)

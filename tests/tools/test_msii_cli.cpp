@@ -423,3 +423,24 @@ TEST(MsiiCli, ComputeCollectionSkipsResumesAndReports)
     EXPECT_NE(r.err.find("has no mesh files"), std::string::npos) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
 }
+
+// --repair drops the faces around a non-manifold edge (a fin glued onto a scan) and the
+// run succeeds with a warning; without it the run is refused with a hint.
+TEST(MsiiCli, RepairDropsFacesAroundNonManifoldEdges)
+{
+    TriMesh mesh = readMesh(smallPatch()).mesh;
+    const Triangle t = mesh.triangles[mesh.numTriangles() / 2];
+    mesh.points.push_back((mesh.points[t[0]] + mesh.points[t[1]]) * 0.5 + Vec3(0, 0, 0.3));
+    mesh.triangles.push_back({t[0], t[1], std::uint32_t(mesh.numVertices() - 1)});
+    const std::string fin = (tempDir() / "fin.ply").string();
+    writePly(fin, mesh, {});
+    const fs::path out = tempDir() / "fin.msii.ply";
+    RunResult r = runMsii("compute '" + fin + "' -r 0.8 -n 4 --output '" + out.string() + "'");
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("use --repair"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+    r = runMsii("compute '" + fin + "' -r 0.8 -n 4 --repair --output '" + out.string() + "'");
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("removed the 3 faces around 1 non-manifold edges"), std::string::npos) << r.err;
+    EXPECT_TRUE(fs::exists(out));
+}

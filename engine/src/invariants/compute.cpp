@@ -54,6 +54,17 @@ ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Pr
         if (mesh.numTriangles() == 0) throw InvalidInputError("the mesh has no usable faces");
         result.check = checkMesh(mesh);
     }
+    if (options.repair && result.check.numNonManifoldEdges > 0) {
+        const std::size_t edges = result.check.numNonManifoldEdges;
+        const std::size_t removed = removeNonManifoldFaces(mesh);
+        result.removedFaces += removed;
+        std::ostringstream msg;
+        msg << "removed the " << removed << " faces around " << edges
+            << " non-manifold edges (values near the hole are masked like a border)";
+        result.warnings.push_back(msg.str());
+        if (mesh.numTriangles() == 0) throw InvalidInputError("the mesh has no usable faces");
+        result.check = checkMesh(mesh);
+    }
     if (const std::string problem = result.check.firstProblem(); !problem.empty())
         throw InvalidInputError(problem);
     if (result.check.numInconsistentEdges > 0) {

@@ -102,7 +102,7 @@ std::string MeshCheckResult::firstProblem() const
                " (same vertices as an earlier face); use --repair to drop them";
     if (numNonManifoldEdges > 0)
         return "the mesh has " + plural(numNonManifoldEdges, "non-manifold edge", "non-manifold edges") +
-               " (shared by more than two faces)";
+               " (shared by more than two faces); use --repair to drop the faces around them";
     return {};
 }
 
@@ -281,6 +281,39 @@ std::size_t removeBadFaces(TriMesh& mesh, const MeshCheckResult& check)
     const std::size_t removed = mesh.triangles.size() - kept;
     mesh.triangles.resize(kept);
     return removed;
+}
+
+std::size_t removeNonManifoldFaces(TriMesh& mesh)
+{
+    // Undirected edges (smaller << 32 | larger) with their face counts; sorted, so the
+    // result does not depend on hashing or threads.
+    const std::size_t nf = mesh.triangles.size();
+    std::vector<std::uint64_t> edges;
+    edges.reserve(3 * nf);
+    const auto key = [](std::uint32_t a, std::uint32_t b) {
+        return std::uint64_t(std::min(a, b)) << 32 | std::uint64_t(std::max(a, b));
+    };
+    for (const Triangle& t : mesh.triangles)
+        for (int k = 0; k < 3; ++k) edges.push_back(key(t[k], t[(k + 1) % 3]));
+    std::sort(edges.begin(), edges.end());
+    std::vector<std::uint64_t> shared;  // edges of more than two faces
+    for (std::size_t i = 0; i < edges.size();) {
+        std::size_t j = i + 1;
+        while (j < edges.size() && edges[j] == edges[i]) ++j;
+        if (j - i > 2) shared.push_back(edges[i]);
+        i = j;
+    }
+    if (shared.empty()) return 0;
+    std::size_t kept = 0;
+    for (std::size_t f = 0; f < nf; ++f) {
+        const Triangle t = mesh.triangles[f];
+        bool bad = false;
+        for (int k = 0; k < 3 && !bad; ++k)
+            bad = std::binary_search(shared.begin(), shared.end(), key(t[k], t[(k + 1) % 3]));
+        if (!bad) mesh.triangles[kept++] = t;
+    }
+    mesh.triangles.resize(kept);
+    return nf - kept;
 }
 
 } // namespace msii

@@ -3,7 +3,8 @@
 /// @brief Finds what makes a mesh unusable or dubious: non-finite coordinates, faces with
 /// repeated or out-of-range indices, zero-area faces, duplicate faces, non-manifold edges,
 /// inconsistent orientation, and borders (open meshes). Optionally repairs what can be
-/// repaired without guessing (drops degenerate and duplicate faces).
+/// repaired without guessing (drops degenerate and duplicate faces, and the faces around
+/// non-manifold edges, which leaves a small hole that is then treated as a border).
 
 #include <msii/mesh/trimesh.h>
 
@@ -49,5 +50,9 @@ MeshCheckResult checkMesh(const TriMesh& mesh, const MeshCheckOptions& options =
 /// Removes the faces listed in check.degenerateFaces and check.duplicateFaces; returns how
 /// many were removed. Vertices are kept (indices stay valid for per-vertex outputs).
 std::size_t removeBadFaces(TriMesh& mesh, const MeshCheckResult& check);
+
+/// Removes every face that has an edge shared by more than two faces; returns how many were
+/// removed. Vertices are kept. Use after removeBadFaces() (duplicates also make such edges).
+std::size_t removeNonManifoldFaces(TriMesh& mesh);
 
 } // namespace msii
