@@ -18,6 +18,8 @@ packages=(
   libcli11-dev nlohmann-json3-dev
   libgtest-dev
 )
+# The tests also run the Snakemake workflow of samples/snakemake.
+[ "$with_tests" = ON ] && packages+=(snakemake)
 
 missing=()
 for p in "${packages[@]}"; do

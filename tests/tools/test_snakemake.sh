@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# The Snakemake workflow of samples/snakemake on a folder of generated scans (issue 6):
+# runs locally with --cores 2; every scan gives the same PLY as `msii compute` run directly
+# (byte for byte), a picture and a summary line; a rerun does nothing; a broken scan fails
+# its job while the others finish (--keep-going); the workflow is ready for Slurm (dry run).
+# Usage: test_snakemake.sh MSII MSII_SAMPLES SNAKEFILE
+set -euo pipefail
+msii="$1" samples="$2" snakefile="$3"
+fail() { echo "FAIL: $*" >&2; exit 1; }
+command -v snakemake >/dev/null || fail "snakemake is not installed (tools/setup.sh installs it)"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+cd "$work"
+mkdir scans
+"$samples" tablet --width 5 --height 4 --spacing 0.1 -o scans/a.ply -q
+"$samples" terrain --width 5 --height 4 --spacing 0.1 -o scans/b.ply -q
+"$samples" sphere --radius 2 --spacing 0.15 -o scans/c.ply -q
+run() { snakemake --snakefile "$snakefile" --cores 2 --config scans=scans results=results radius=0.6 scales=4 \
+          msii="$msii" "$@"; }
+
+run -q > log1.txt 2>&1 || { cat log1.txt; fail "the workflow failed"; }
+for name in a b c; do
+  for f in results/$name.msii.ply results/$name.msii.json results/$name.quality.png; do
+    [ -s "$f" ] || fail "missing $f"
+  done
+  "$msii" compute scans/$name.ply --radius 0.6 --scales 4 --quiet --output direct-$name.ply
+  cmp -s results/$name.msii.ply direct-$name.ply || fail "$name: the workflow's PLY differs from msii compute's"
+done
+[ "$(wc -l < results/msii-summary.jsonl)" -eq 3 ] || fail "the summary should have 3 lines"
+grep -q '"vertices"' results/msii-summary.jsonl || fail "the summary has no vertex counts"
+
+run > log2.txt 2>&1 || { cat log2.txt; fail "the rerun failed"; }
+grep -q "Nothing to be done" log2.txt || { cat log2.txt; fail "the rerun did work again"; }
+
+# A broken scan: its job fails, the others still finish, nothing half-written is left.
+printf 'OFF\n0 0 0\n' > scans/d.off
+rm results/b.msii.ply
+if run --keep-going > log3.txt 2>&1; then fail "a broken scan should fail the workflow"; fi
+[ -s results/b.msii.ply ] || fail "b should have been redone despite d failing"
+[ ! -e results/d.msii.ply ] || fail "d.msii.ply should not exist"
+grep -q "contains no vertices" results/logs/d.compute.log || fail "d's log should say why"
+
+# Ready for a cluster: the same workflow plans its jobs for Slurm (dry run).
+rm scans/d.off
+snakemake --snakefile "$snakefile" --slurm --jobs 10 --default-resources slurm_partition=main runtime=60 -n \
+  --config scans=scans results=results-slurm radius=0.6 scales=4 msii="$msii" > log4.txt 2>&1 \
+  || { cat log4.txt; fail "the Slurm dry run failed"; }
+grep -q "compute" log4.txt || fail "the Slurm dry run planned no compute jobs"
+echo "snakemake workflow: ok"
