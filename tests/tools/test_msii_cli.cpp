@@ -444,3 +444,23 @@ TEST(MsiiCli, RepairDropsFacesAroundNonManifoldEdges)
     EXPECT_NE(r.err.find("removed the 3 faces around 1 non-manifold edges"), std::string::npos) << r.err;
     EXPECT_TRUE(fs::exists(out));
 }
+
+// --tiles and --memory-budget (issue 6): the tiled run writes the same features as the
+// untiled one, records its tiling in the JSON, and a budget too small for one tile is refused.
+TEST(MsiiCli, TiledComputeWritesTheSameFeatures)
+{
+    const fs::path untiled = tempDir() / "untiled.msii.ply", tiled = tempDir() / "tiled.msii.ply";
+    RunResult r = runMsii("compute '" + smallPatch() + "' -r 0.6 -n 4 -q --overwrite --output '" + untiled.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = runMsii("compute '" + smallPatch() + "' -r 0.6 -n 4 -q --overwrite --tiles 2 --output '" + tiled.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto a = propertiesOf(untiled), b = propertiesOf(tiled);
+    ASSERT_EQ(a.size(), b.size());
+    for (const auto& [name, values] : a) {
+        ASSERT_TRUE(b.count(name)) << name;
+        EXPECT_TRUE(sameFloats(values, b.at(name))) << name;
+    }
+    EXPECT_NE(readFile((tempDir() / "tiled.msii.json").string()).find("\"tiles_per_axis\": 2"), std::string::npos);
+    expectCleanFailure("'" + smallPatch() + "' -r 0.6 --memory-budget 10K", "too small for even one tile");
+    expectCleanFailure("'" + smallPatch() + "' -r 0.6 --memory-budget lots", "is not a size");
+}

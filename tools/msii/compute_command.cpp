@@ -13,6 +13,7 @@
 #include <msii/io/write_ply.h>
 #include <msii/mesh/mesh_stats.h>
 #include <msii/mesh/read_mesh.h>
+#include <msii/tiling/tiled_compute.h>
 
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
@@ -49,6 +50,8 @@ struct ComputeArgs {
     std::size_t randomVertices = 0;
     std::uint64_t seed = 1;
     bool gigamesh = false;
+    std::string memoryBudget;   // e.g. "8G": tiles sized to fit
+    int tiles = 0;              // tiles per axis (0: from the budget)
     std::string manifest;       // JSON lines; default for collections: <output folder>/msii-manifest.jsonl
     bool recursive = false;     // folders: also their subfolders
 };
@@ -185,6 +188,26 @@ std::string radiusHint(const std::string& input)
     }
 }
 
+/// "8G", "500M", "8GB", "2.5e9" (bytes) to bytes; empty = 0 (no limit).
+double parseBytes(const std::string& text)
+{
+    if (text.empty()) return 0;
+    std::size_t used = 0;
+    double value = 0;
+    try {
+        value = std::stod(text, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    std::string unit = text.substr(used);
+    std::transform(unit.begin(), unit.end(), unit.begin(), [](unsigned char c) { return char(std::toupper(c)); });
+    if (!unit.empty() && unit.back() == 'B') unit.pop_back();
+    const double scale = unit.empty() ? 1 : unit == "K" ? 1e3 : unit == "M" ? 1e6 : unit == "G" ? 1e9 : unit == "T" ? 1e12 : 0;
+    if (used == 0 || scale == 0 || !(value > 0) || !std::isfinite(value))
+        throw InvalidInputError("--memory-budget '" + text + "' is not a size (use e.g. 8G or 500M)");
+    return value * scale;
+}
+
 OneResult computeOne(const ComputeArgs& args, const std::string& input, const std::string& output)
 {
     const Stopwatch total;
@@ -229,8 +252,17 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
         throw InvalidInputError("--vertices and --random-vertices go with --exact");
     }
     ComputeResult result;
+    TiledComputeInfo tiledInfo;
+    const bool tiled = !args.exact && (!args.memoryBudget.empty() || args.tiles > 0);
     try {
-        result = computeInvariants(read.mesh, options, &progress);
+        if (tiled) {
+            TilingOptions tilingOptions;
+            tilingOptions.memoryBudget = parseBytes(args.memoryBudget);
+            tilingOptions.tilesPerAxis = args.tiles;
+            result = computeTiled(read.mesh, options, tilingOptions, &tiledInfo, &progress);
+        } else {
+            result = computeInvariants(read.mesh, options, &progress);
+        }
     } catch (const InvalidInputError& e) {
         throw InvalidInputError(fs::path(input).filename().string() + ": " + e.what());
     }
@@ -340,6 +372,12 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                             {"samples", t.samples},    {"patch_line", t.patchLine},
                             {"exact", t.exact},        {"write", writeSeconds},
                             {"total", total.seconds()}};
+    if (tiled)
+        j["tiling"] = {{"tiles_per_axis", tiledInfo.tilesPerAxis},
+                       {"tiles", tiledInfo.tiles},
+                       {"largest_tile_vertices", tiledInfo.largestTileVertices},
+                       {"halo", tiledInfo.haloWidth},
+                       {"estimated_peak_bytes", tiledInfo.estimatedPeakBytes}};
     j["warnings"] = result.warnings;
     writeTextFileAtomic(sidecar, j.dump(2) + "\n");
 
@@ -351,6 +389,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
 }
 
 /// Mesh files msii reads, by extension (case-insensitive).
+
 bool isMeshFile(const fs::path& p)
 {
     std::string ext = p.extension().string();
@@ -465,6 +504,10 @@ std::function<int()> addComputeCommand(CLI::App& app)
                     "Collections: JSON-lines record of each input (appended; default "
                     "<output folder>/msii-manifest.jsonl)");
     cmd->add_flag("--recursive", args->recursive, "Folders: include their subfolders");
+    cmd->add_option("--memory-budget", args->memoryBudget,
+                    "Compute in spatial tiles sized to fit this memory (e.g. 8G); results equal the "
+                    "untiled run");
+    cmd->add_option("--tiles", args->tiles, "Tiles per axis (instead of sizing them from --memory-budget)");
     cmd->add_option("--output-dir", args->outputDir,
                     "Folder for the outputs <name>.msii.ply (default: next to each input)");
     cmd->add_option("--voxel-size", args->voxelSize,

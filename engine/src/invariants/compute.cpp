@@ -26,9 +26,8 @@ double chooseVoxelSize(double medianEdge, const std::vector<double>& radii,
     return std::max(0.5 * medianEdge, first / minVoxelsPerRadius);
 }
 
-ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Progress* progress)
+ComputeResult prepareComputation(TriMesh& mesh, const ComputeOptions& options)
 {
-    const Stopwatch total;
     if (!(options.radius > 0) || !std::isfinite(options.radius))
         throw InvalidInputError("the radius must be a positive number");
     if (options.scales < 1) throw InvalidInputError("the number of scales must be at least 1");
@@ -42,7 +41,7 @@ ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Pr
     if (mesh.numTriangles() == 0) throw InvalidInputError("the mesh has no faces");
 
     ComputeResult result;
-    Stopwatch stage;
+    const Stopwatch stage;
     result.check = checkMesh(mesh);
     if (result.check.numNonFinitePoints > 0) throw InvalidInputError(result.check.firstProblem());
     if (options.repair &&
@@ -103,6 +102,15 @@ ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Pr
             << result.stats.medianEdge << "): its values carry little information (paper §3)";
         result.warnings.push_back(msg.str());
     }
+    return result;
+}
+
+ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Progress* progress)
+{
+    const Stopwatch total;
+    ComputeResult result = prepareComputation(mesh, options);
+    Stopwatch stage;
+    const std::vector<double> radii = equidistantRadii(options.radius, options.scales);
 
     if (!options.computeVolume && !options.computeSphere && !options.computePatch &&
         !options.computeLine)

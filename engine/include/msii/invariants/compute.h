@@ -61,6 +61,12 @@ struct ComputeResult {
 double chooseVoxelSize(double medianEdge, const std::vector<double>& radii,
                        double minVoxelsPerRadius);
 
+/// The checks and set-up of computeInvariants without the computation: parameters, mesh
+/// check (and repair), statistics, voxel size and warnings, in a result whose feature columns
+/// are empty. Used by the tiled computation, which plans on the whole mesh.
+/// @throw InvalidInputError as computeInvariants.
+ComputeResult prepareComputation(TriMesh& mesh, const ComputeOptions& options);
+
 /// Runs the job on @p mesh (which may be modified by repair).
 /// @throw InvalidInputError for unusable meshes or parameters, with one clear sentence.
 ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options,

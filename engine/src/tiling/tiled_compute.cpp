@@ -1,0 +1,203 @@
+#include <msii/tiling/tiled_compute.h>
+
+#include <msii/core/errors.h>
+#include <msii/core/stopwatch.h>
+#include <msii/invariants/scales.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace msii {
+namespace {
+
+/// The tiles of a grid over axes a and b (the two longest), as index boxes.
+struct TileGrid {
+    int axisA = 0, axisB = 1, n = 1;
+    double minA = 0, minB = 0, sizeA = 1, sizeB = 1;  // tile sizes
+    int cell(double v, double lo, double size) const
+    {
+        return std::clamp(int(std::floor((v - lo) / size)), 0, n - 1);
+    }
+    int tileOf(const Vec3& p) const { return cell(p[axisA], minA, sizeA) * n + cell(p[axisB], minB, sizeB); }
+};
+
+TileGrid makeGrid(const MeshStats& stats, int n)
+{
+    const Vec3 ext = stats.bboxMax - stats.bboxMin;
+    std::array<int, 3> axes{0, 1, 2};
+    std::sort(axes.begin(), axes.end(), [&](int i, int j) { return ext[i] > ext[j]; });
+    TileGrid g;
+    g.axisA = axes[0], g.axisB = axes[1], g.n = n;
+    g.minA = stats.bboxMin[g.axisA], g.minB = stats.bboxMin[g.axisB];
+    g.sizeA = std::max(ext[g.axisA], 1e-300) / n;
+    g.sizeB = std::max(ext[g.axisB], 1e-300) / n;
+    return g;
+}
+
+/// Whether p lies in tile t grown by the halo.
+bool inGrownTile(const TileGrid& g, int t, const Vec3& p, double halo)
+{
+    const int ia = t / g.n, ib = t % g.n;
+    const double a = p[g.axisA], b = p[g.axisB];
+    return a >= g.minA + ia * g.sizeA - halo && a <= g.minA + (ia + 1) * g.sizeA + halo &&
+           b >= g.minB + ib * g.sizeB - halo && b <= g.minB + (ib + 1) * g.sizeB + halo;
+}
+
+/// Vertices inside each grown tile (an estimate of the tile's size with its halo).
+std::vector<std::size_t> grownTileSizes(const TriMesh& mesh, const TileGrid& g, double halo)
+{
+    std::vector<std::size_t> count(std::size_t(g.n) * g.n, 0);
+    for (const Vec3& p : mesh.points) {
+        const int a0 = g.cell(p[g.axisA] - halo, g.minA, g.sizeA), a1 = g.cell(p[g.axisA] + halo, g.minA, g.sizeA);
+        const int b0 = g.cell(p[g.axisB] - halo, g.minB, g.sizeB), b1 = g.cell(p[g.axisB] + halo, g.minB, g.sizeB);
+        for (int a = a0; a <= a1; ++a)
+            for (int b = b0; b <= b1; ++b) ++count[std::size_t(a * g.n + b)];
+    }
+    return count;
+}
+
+std::string gigabytes(double bytes)
+{
+    std::ostringstream s;
+    s.precision(2);
+    s << std::fixed << bytes / 1e9 << " GB";
+    return s.str();
+}
+
+} // namespace
+
+ComputeResult computeTiled(TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
+                           TiledComputeInfo* info, Progress* progress)
+{
+    const Stopwatch total;
+    if (options.exact) throw InvalidInputError("the exact mode is not tiled (restrict it with --vertices)");
+    if (tiling.memoryBudget < 0 || !std::isfinite(tiling.memoryBudget))
+        throw InvalidInputError("the memory budget must be a positive number of bytes");
+    if (tiling.tilesPerAxis < 0 || tiling.tilesPerAxis > 1024)
+        throw InvalidInputError("the tiles per axis must be between 1 and 1024");
+    ComputeResult plan = prepareComputation(mesh, options);
+    const std::vector<double> radii = equidistantRadii(options.radius, options.scales);
+    const std::vector<int> levels = gridLevelOfRadius(radii, plan.voxelSize, options.minVoxelsPerRadius);
+    const double h0 = plan.voxelSize, hCoarse = h0 * double(1 << *std::max_element(levels.begin(), levels.end()));
+    // Border distances are searched up to 2R; balls with their margin reach R + 4 h_L + 2 h_0.
+    const double halo = std::max(2.0 * options.radius, options.radius + 4.0 * hCoarse + 2.0 * h0) + 2.0 * h0;
+
+    // Memory: the mesh and its result columns stay whole; each tile's computation comes on top.
+    const std::size_t nv = mesh.numVertices();
+    const int invariants = int(options.computeVolume) + int(options.computeSphere) +
+                           int(options.computePatch) + int(options.computeLine);
+    const double fixedBytes = double(nv) * (24.0 + 4.0 * invariants * options.scales) +
+                              double(mesh.numTriangles()) * 12.0;
+    const double perVertex = kBytesPerTileVertex * std::max(1.0, options.scales / 16.0);
+    int n = tiling.tilesPerAxis;
+    std::vector<std::size_t> sizes;
+    TileGrid grid;
+    if (n == 0) {
+        if (tiling.memoryBudget > 0 && tiling.memoryBudget <= fixedBytes)
+            throw InvalidInputError("the memory budget of " + gigabytes(tiling.memoryBudget) +
+                                    " is too small for even one tile: the mesh and its results alone take " +
+                                    gigabytes(fixedBytes));
+        const double allowed = tiling.memoryBudget > 0 ? (tiling.memoryBudget - fixedBytes) / perVertex
+                                                       : std::numeric_limits<double>::max();
+        const Vec3 ext = plan.stats.bboxMax - plan.stats.bboxMin;
+        const double longest = std::max({ext.x, ext.y, ext.z});
+        for (n = 1;; ++n) {
+            grid = makeGrid(plan.stats, n);
+            sizes = grownTileSizes(mesh, grid, halo);
+            if (double(*std::max_element(sizes.begin(), sizes.end())) <= allowed) break;
+            // Tiles much narrower than their halo would be mostly halo: give up.
+            if (longest / n < 0.5 * halo || n >= 1024) {
+                const double needed = fixedBytes + perVertex * double(*std::max_element(sizes.begin(), sizes.end()));
+                throw InvalidInputError("the memory budget of " + gigabytes(tiling.memoryBudget) +
+                                        " is too small for even one tile (tiles narrower than their halo of " +
+                                        std::to_string(halo) + " would still need about " + gigabytes(needed) +
+                                        "); raise the budget or use a smaller radius");
+            }
+        }
+    } else {
+        grid = makeGrid(plan.stats, n);
+        sizes = grownTileSizes(mesh, grid, halo);
+    }
+
+    // Result columns for the whole mesh, NaN until a tile fills them.
+    ComputeResult result = plan;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const auto columns = [&](bool wanted) {
+        return wanted ? std::vector<std::vector<float>>(radii.size(), std::vector<float>(nv, nan))
+                      : std::vector<std::vector<float>>();
+    };
+    result.invariants.volume = columns(options.computeVolume);
+    result.invariants.sphere = columns(options.computeSphere);
+    result.patchLine.patch = columns(options.computePatch);
+    result.patchLine.line = columns(options.computeLine);
+    result.invariants.radii = result.patchLine.radii = radii;
+    result.invariants.levelOfRadius = result.patchLine.levelOfRadius = levels;
+    result.invariants.numLevels = *std::max_element(levels.begin(), levels.end()) + 1;
+
+    std::vector<int> tileOf(nv);
+    for (std::size_t i = 0; i < nv; ++i) tileOf[i] = grid.tileOf(mesh.points[i]);
+    ComputeOptions tileOptions = options;
+    tileOptions.voxelSize = plan.voxelSize;  // the whole mesh's grid, so that tiles agree
+    tileOptions.repair = false;              // already done on the whole mesh
+    std::size_t computed = 0;
+    for (int t = 0; t < n * n; ++t) {
+        if (std::find(tileOf.begin(), tileOf.end(), t) == tileOf.end()) continue;
+        // The tile's triangles: those with a vertex in the grown tile.
+        TriMesh tile;
+        std::vector<std::uint32_t> local(nv, std::numeric_limits<std::uint32_t>::max());
+        std::vector<std::uint32_t> global;
+        for (const Triangle& tri : mesh.triangles) {
+            if (!inGrownTile(grid, t, mesh.points[tri[0]], halo) && !inGrownTile(grid, t, mesh.points[tri[1]], halo) &&
+                !inGrownTile(grid, t, mesh.points[tri[2]], halo))
+                continue;
+            Triangle lt;
+            for (int k = 0; k < 3; ++k) {
+                std::uint32_t& l = local[tri[std::size_t(k)]];
+                if (l == std::numeric_limits<std::uint32_t>::max()) {
+                    l = std::uint32_t(tile.points.size());
+                    tile.points.push_back(mesh.points[tri[std::size_t(k)]]);
+                    global.push_back(tri[std::size_t(k)]);
+                }
+                lt[std::size_t(k)] = l;
+            }
+            tile.triangles.push_back(lt);
+        }
+        const ComputeResult part = computeInvariants(tile, tileOptions, progress);
+        const auto scatter = [&](std::vector<std::vector<float>>& to, const std::vector<std::vector<float>>& from) {
+            for (std::size_t j = 0; j < to.size() && j < from.size(); ++j)
+                for (std::size_t l = 0; l < global.size(); ++l)
+                    if (tileOf[global[l]] == t) to[j][global[l]] = from[j][l];
+        };
+        scatter(result.invariants.volume, part.invariants.volume);
+        scatter(result.invariants.sphere, part.invariants.sphere);
+        scatter(result.patchLine.patch, part.patchLine.patch);
+        scatter(result.patchLine.line, part.patchLine.line);
+        const ComputeTimings& pt = part.timings;
+        ComputeTimings& rt = result.timings;
+        rt.levelSet += pt.levelSet, rt.occupancy += pt.occupancy, rt.stencils += pt.stencils;
+        rt.interpolation += pt.interpolation, rt.samples += pt.samples, rt.patchLine += pt.patchLine;
+        result.levelSetVoxels += part.levelSetVoxels;
+        result.levelSetBytes = std::max(result.levelSetBytes, part.levelSetBytes);
+        result.bandHalfWidth = part.bandHalfWidth;
+        ++computed;
+    }
+    std::size_t masked = 0;
+    for (const auto* cols : {&result.invariants.volume, &result.invariants.sphere})
+        for (const auto& c : *cols)
+            for (float v : c) masked += std::isnan(v);
+    result.invariants.numMaskedValues = masked;
+    if (info) {
+        info->tilesPerAxis = n;
+        info->tiles = computed;
+        info->largestTileVertices = *std::max_element(sizes.begin(), sizes.end());
+        info->haloWidth = halo;
+        info->estimatedPeakBytes = fixedBytes + perVertex * double(info->largestTileVertices);
+    }
+    result.timings.total = total.seconds();
+    return result;
+}
+
+} // namespace msii
