@@ -161,9 +161,10 @@ TEST(FeatureMap, PlusZViewChannelsMatchTheClosedForms)
     for (int y = 0; y < frame.height; ++y)
         for (int x = 0; x < frame.width; ++x) {
             const std::size_t k = std::size_t(y) * std::size_t(frame.width) + std::size_t(x);
-            // +z view: origin 0, u = x, v = y, height = z.
-            const double u = frame.minU + (x + 0.5) * frame.pixelSize;
-            const double v = frame.maxV - (y + 0.5) * frame.pixelSize;
+            // +z view: u = x − origin.x, v = y − origin.y, height = z − origin.z (the
+            // origin is the surface's centroid).
+            const double u = frame.minU + (x + 0.5) * frame.pixelSize + frame.origin.x;
+            const double v = frame.maxV - (y + 0.5) * frame.pixelSize + frame.origin.y;
             if (mask[k] != 0 && mask[k] != 1) ++wrongMask;
             const int where = classify(u, v);
             if (where == 1 && mask[k] != 1) ++coveredNotCovered;
@@ -176,7 +177,7 @@ TEST(FeatureMap, PlusZViewChannelsMatchTheClosedForms)
                 continue;
             }
             ++covered;
-            heightError = std::max(heightError, std::abs(height[k] - (kA * u + kB * v)));
+            heightError = std::max(heightError, std::abs(height[k] - (kA * u + kB * v - frame.origin.z)));
             qualityError = std::max(qualityError, std::abs(quality[k] - (u + 2 * v)));
             normalError = std::max({normalError, std::abs(nx[k] - n.x), std::abs(ny[k] - n.y), std::abs(nz[k] - n.z)});
             v01Error = std::max(v01Error, std::abs(v01[k] - 0.25));

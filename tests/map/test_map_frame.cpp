@@ -263,7 +263,8 @@ TEST(MapView, NamedViewsAxes)
         EXPECT_EQ(f.axisU, c.u) << c.name;
         EXPECT_EQ(f.axisV, c.v) << c.name;
         EXPECT_EQ(f.normal, c.n) << c.name;
-        EXPECT_EQ(f.origin, Vec3(0, 0, 0)) << c.name;
+        // The origin is the surface's centroid (the cube's centre) for every view.
+        expectVecNear(f.origin, Vec3(6, 7, 8), 1e-9, c.name);
         // A cube face: 50 x 50 pixels of 0.2, the image exactly over the projected square.
         EXPECT_EQ(f.width, 50) << c.name;
         EXPECT_EQ(f.height, 50) << c.name;
@@ -272,7 +273,7 @@ TEST(MapView, NamedViewsAxes)
         EXPECT_NEAR(f.minU, box.minU, 1e-9) << c.name;
         EXPECT_NEAR(f.maxV, box.maxV, 1e-9) << c.name;
         // toMap: the cube's far corner along the normal has height = its offset along n.
-        EXPECT_NEAR(f.toMap(Vec3(11, 12, 13)).z, dot(Vec3(11, 12, 13), c.n), 1e-12) << c.name;
+        EXPECT_NEAR(f.toMap(Vec3(11, 12, 13)).z, dot(Vec3(11, 12, 13) - f.origin, c.n), 1e-12) << c.name;
     }
     MapFrameOptions best;
     best.view = MapView::PlusX;
@@ -470,16 +471,20 @@ TEST(MapPixels, CentresInsideBoundingBoxAndBoxInsideImage)
     const TriMesh plane = translated(planeMesh(20, 10, 0.5), Vec3(3, -2, 0));
     for (double ps : {0.3, 0.5, 0.07, 1.7}) {
         const MapFrame f = makeMapFrame(plane, viewOptions("+z", ps));
+        // Map coordinates are measured from the origin, the surface's centroid (13, 3, 0).
+        EXPECT_NEAR(f.origin.x, 13, 1e-9);
+        EXPECT_NEAR(f.origin.y, 3, 1e-9);
+        const double ox = f.origin.x, oy = f.origin.y;
         EXPECT_EQ(f.width, int(std::ceil(20 / ps - 1e-9))) << ps;
         EXPECT_EQ(f.height, int(std::ceil(10 / ps - 1e-9))) << ps;
         // The box [3, 23] x [-2, 8] inside the image (up to 1e-9 pixel), centred in it.
         const double slack = 1e-9 * ps;
-        EXPECT_LE(f.minU, 3 + slack) << ps;
-        EXPECT_GE(f.minU + f.width * ps, 23 - slack) << ps;
-        EXPECT_GE(f.maxV, 8 - slack) << ps;
-        EXPECT_LE(f.maxV - f.height * ps, -2 + slack) << ps;
-        EXPECT_NEAR(f.minU + 0.5 * f.width * ps, 13, 1e-12) << ps;
-        EXPECT_NEAR(f.maxV - 0.5 * f.height * ps, 3, 1e-12) << ps;
+        EXPECT_LE(f.minU + ox, 3 + slack) << ps;
+        EXPECT_GE(f.minU + ox + f.width * ps, 23 - slack) << ps;
+        EXPECT_GE(f.maxV + oy, 8 - slack) << ps;
+        EXPECT_LE(f.maxV + oy - f.height * ps, -2 + slack) << ps;
+        EXPECT_NEAR(f.minU + ox + 0.5 * f.width * ps, 13, 1e-9) << ps;
+        EXPECT_NEAR(f.maxV + oy - 0.5 * f.height * ps, 3, 1e-9) << ps;
         // Less than one pixel of margin in all.
         EXPECT_LT(f.width * ps - 20, ps) << ps;
         EXPECT_LT(f.height * ps - 10, ps) << ps;
@@ -487,21 +492,21 @@ TEST(MapPixels, CentresInsideBoundingBoxAndBoxInsideImage)
         // the +z view's map coordinates are x and y.
         for (int x = 0; x < f.width; ++x) {
             const double u = centreU(f, x);
-            EXPECT_GT(u, 3) << ps << " x " << x;
-            EXPECT_LT(u, 23) << ps << " x " << x;
+            EXPECT_GT(u + ox, 3) << ps << " x " << x;
+            EXPECT_LT(u + ox, 23) << ps << " x " << x;
             EXPECT_NEAR(f.pixelX(u), x + 0.5, 1e-9) << ps << " x " << x;
         }
         for (int y = 0; y < f.height; ++y) {
             const double v = centreV(f, y);
-            EXPECT_GT(v, -2) << ps << " y " << y;
-            EXPECT_LT(v, 8) << ps << " y " << y;
+            EXPECT_GT(v + oy, -2) << ps << " y " << y;
+            EXPECT_LT(v + oy, 8) << ps << " y " << y;
             EXPECT_NEAR(f.pixelY(v), y + 0.5, 1e-9) << ps << " y " << y;
         }
         // Row 0 is the top (largest v), column 0 the left (smallest u).
         EXPECT_GT(centreV(f, 0), centreV(f, f.height - 1));
         EXPECT_LT(centreU(f, 0), centreU(f, f.width - 1));
         const Vec3 m = f.toMap(Vec3(4.5, 6.25, 0.75));
-        EXPECT_EQ(m, Vec3(4.5, 6.25, 0.75));
+        EXPECT_EQ(m, Vec3(4.5 - ox, 6.25 - oy, 0.75 - f.origin.z));
     }
 }
 
@@ -658,10 +663,11 @@ TEST(Rasterize, DepthTestShowsTheNearerSurface)
         ASSERT_EQ(f.height, 130);
         const PixelHits hits = rasterize(both, f);
         const bool fromAbove = view[0] == '+';
+        const double heightA = float((0.0 - f.origin.z) * f.normal.z), heightB = float((1.0 - f.origin.z) * f.normal.z);
         int checked[3] = {0, 0, 0}, wrong = 0, background = 0;
         for (int y = 0; y < f.height; ++y)
             for (int x = 0; x < f.width; ++x) {
-                const Vec3 p = f.axisU * centreU(f, x) + f.axisV * centreV(f, y);  // origin 0
+                const Vec3 p = f.origin + f.axisU * centreU(f, x) + f.axisV * centreV(f, y);
                 const bool overA = p.x > 0 && p.x < 10 && p.y > 0 && p.y < 10;
                 const bool overB = p.x > 4 && p.x < 14 && p.y > 3 && p.y < 13;
                 const std::size_t k = hits.index(x, y);
@@ -674,17 +680,17 @@ TEST(Rasterize, DepthTestShowsTheNearerSurface)
                     continue;
                 }
                 if (overA && overB) {
-                    // From +z B (z = 1, height 1) hides A; from −z A (height −0 = 0) hides B
-                    // (height −1).
+                    // From +z B (z = 1) hides A; from −z A (z = 0) hides B. Heights are
+                    // measured from the centroid (z = 0.5): ±0.5.
                     const bool ok = t != PixelHits::kNone &&
-                                    (fromAbove ? !inA(t, a) && depth == 1 : inA(t, a) && depth == 0);
+                                    (fromAbove ? !inA(t, a) && depth == heightB : inA(t, a) && depth == heightA);
                     wrong += !ok;
                     ++checked[0];
                 } else if (overA) {
-                    wrong += !(t != PixelHits::kNone && inA(t, a) && depth == 0);
+                    wrong += !(t != PixelHits::kNone && inA(t, a) && depth == heightA);
                     ++checked[1];
                 } else {
-                    wrong += !(t != PixelHits::kNone && !inA(t, a) && depth == (fromAbove ? 1 : -1));
+                    wrong += !(t != PixelHits::kNone && !inA(t, a) && depth == heightB);
                     ++checked[2];
                 }
             }
@@ -782,9 +788,35 @@ TEST(Rasterize, VertexNormalsAndInterpolate)
     double err = 0;
     for (int y = 0; y < f.height; ++y)
         for (int x = 0; x < f.width; ++x)
-            err = std::max(err, std::abs(double(hits.interpolate(plane, xs, hits.index(x, y))) - centreU(f, x)));
+            err = std::max(err, std::abs(double(hits.interpolate(plane, xs, hits.index(x, y))) - (centreU(f, x) + f.origin.x)));
     EXPECT_LE(err, 1e-5);
     record("interpolateError", err);
 }
 
 } // namespace
+
+// A closed mesh with a tiny hole keeps the closed-mesh side rule (the vector area of the hole
+// is far below the projected area), and square objects get u along x, not along noise.
+TEST(BestFit, ClosedWithTinyHoleAndSquareObjects)
+{
+    samples::HeightFieldOptions slab;
+    slab.kind = samples::HeightFieldKind::Tablet;
+    slab.width = 20;
+    slab.height = 12;
+    slab.spacing = 0.5;
+    slab.closed = true;
+    slab.thickness = 2;
+    TriMesh box = samples::makeHeightField(slab);
+    MapFrameOptions o;
+    o.longerSidePixels = 64;
+    const MapFrame closed = makeMapFrame(box, o);
+    box.triangles.pop_back();  // a hole of one triangle
+    const MapFrame holed = makeMapFrame(box, o);
+    EXPECT_GT(dot(holed.normal, closed.normal), 0.999);  // the same side, not the other
+    // A square plane (equal in-plane extents): u is +x whatever the jitter of the lattice.
+    for (std::uint64_t seed : {1u, 2u, 3u}) {
+        const TriMesh plane = planeMesh(20, 20, 0.5, seed);
+        const MapFrame f = makeMapFrame(plane, o);
+        expectVecNear(f.axisU, Vec3(1, 0, 0), 1e-9, "square plane u");
+    }
+}

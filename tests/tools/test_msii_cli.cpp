@@ -415,6 +415,19 @@ TEST(MsiiCli, ComputeCollectionSkipsResumesAndReports)
               (std::vector<std::string>{"skipped", "done"}));
     EXPECT_NE(readFile(manifest.string()).find("\"radius\":0.8"), std::string::npos);
 
+    // Other parameters than the existing outputs': not skipped but refused (per input).
+    r = runMsii("compute '" + in.string() + "' -r 0.9 -n 4 -q --output-dir '" + out.string() + "'");
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("exists with other parameters (radius"), std::string::npos) << r.err;
+    // Two inputs that would write one output: refused before anything is computed.
+    fs::create_directories(tempDir() / "collection2");
+    fs::copy_file(smallPatch(), tempDir() / "collection2" / "a.ply", fs::copy_options::overwrite_existing);
+    r = runMsii("compute '" + in.string() + "' '" + (tempDir() / "collection2").string() + "' -r 0.8 -n 4 -q --output-dir '" +
+                (tempDir() / "collection-out2").string() + "'");
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("would both write"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(tempDir() / "collection-out2" / "b.msii.ply"));
+
     // A folder without meshes: one clear error, nothing written.
     fs::create_directories(tempDir() / "no-meshes");
     writeFile((tempDir() / "no-meshes" / "readme.txt").string(), "x\n");

@@ -25,6 +25,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <map>
 #include <memory>
 #include <random>
 #include <sstream>
@@ -379,7 +381,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                        {"halo", tiledInfo.haloWidth},
                        {"estimated_peak_bytes", tiledInfo.estimatedPeakBytes}};
     j["warnings"] = result.warnings;
-    writeTextFileAtomic(sidecar, j.dump(2) + "\n");
+    writeTextFileAtomic(sidecar, j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 
     if (!args.quiet)
         std::fprintf(stderr, "msii: %s -> %s (%zu vertices, %.1f s)\n", input.c_str(),
@@ -397,7 +399,7 @@ bool isMeshFile(const fs::path& p)
     if (ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl") return false;
     // Not msii's own outputs (a rerun into the input folder must not take them as inputs).
     const std::string stem = p.stem().string();
-    for (const char* suffix : {".msii", ".gigamesh", ".metric", ".smooth", ".segments"}) {
+    for (const char* suffix : {".msii", ".gigamesh"}) {
         const std::string s(suffix);
         if (stem.size() > s.size() && stem.compare(stem.size() - s.size(), s.size(), s) == 0) return false;
     }
@@ -436,6 +438,39 @@ std::vector<std::string> expandInputs(const ComputeArgs& args, bool& collection)
     return out;
 }
 
+/// Empty if the JSON record @p sidecar was written with the parameters of @p args that shape
+/// the features (radius, scales, precision, voxel size, invariants, exact); else which differ.
+std::string differentParameters(const std::string& sidecar, const ComputeArgs& args)
+{
+    try {
+        std::ifstream in(sidecar);
+        const nlohmann::json j = nlohmann::json::parse(in);
+        const auto& p = j.at("parameters");
+        std::string differs;
+        const auto check = [&](const char* name, double had, double want) {
+            if (std::abs(had - want) > 1e-12 * std::max(1.0, std::abs(want)))
+                differs += std::string(differs.empty() ? "" : ", ") + name + " " + std::to_string(had) +
+                           " instead of " + std::to_string(want);
+        };
+        check("radius", p.at("radius").get<double>(), args.radius);
+        check("scales", p.at("scales").get<double>(), args.scales);
+        check("precision", p.at("precision_voxels_per_radius").get<double>(), args.precision);
+        check("voxel size", p.at("voxel_size_requested").get<double>(), args.voxelSize);
+        if ((p.at("mode").get<std::string>() == "exact") != args.exact) differs += (differs.empty() ? "" : ", ") + std::string("mode");
+        std::string had;
+        for (const auto& c : p.at("invariants")) had += c.get<std::string>();
+        std::string want;
+        const Selection sel = parseInvariants(args);
+        for (const auto& [on, c] : {std::pair{sel.volume, 'V'}, std::pair{sel.sphere, 'S'}, std::pair{sel.patch, 'P'},
+                                    std::pair{sel.line, 'L'}})
+            if (on) want += c;
+        if (had != want) differs += (differs.empty() ? "" : ", ") + std::string("invariants ") + had + " instead of " + want;
+        return differs;
+    } catch (const std::exception&) {
+        return "its JSON record cannot be read";
+    }
+}
+
 /// Appends one JSON line per input to the manifest, flushed at once, so an interrupted run
 /// keeps the lines of what it finished.
 class Manifest {
@@ -455,7 +490,7 @@ public:
     void add(const nlohmann::json& line)
     {
         if (!mFile) return;
-        const std::string text = line.dump() + "\n";
+        const std::string text = line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
         if (std::fwrite(text.data(), 1, text.size(), mFile) != text.size() || std::fflush(mFile) != 0)
             throw IOError("cannot write the manifest " + mPath);
     }
@@ -547,16 +582,27 @@ std::function<int()> addComputeCommand(CLI::App& app)
         const std::vector<std::string> inputs = expandInputs(*args, collection);
         if (!args->output.empty() && inputs.size() > 1)
             throw InvalidInputError("--output takes one input; use --output-dir for several");
+        if (!args->outputDir.empty()) {
+            std::error_code ec;
+            fs::create_directories(args->outputDir, ec);
+            if (ec) throw IOError("cannot create the output folder " + args->outputDir + ": " + ec.message());
+        }
         if (!collection) {
             computeOne(*args, inputs.front(), outputPathFor(*args, inputs.front()));
             return 0;
         }
         // A collection: each input on its own; a failure is reported and the rest go on;
         // finished outputs are skipped unless --overwrite, so an interrupted run resumes.
-        if (!args->outputDir.empty()) {
-            std::error_code ec;
-            fs::create_directories(args->outputDir, ec);
-            if (ec) throw IOError("cannot create the output folder " + args->outputDir + ": " + ec.message());
+        // Two inputs must not share an output (same name in two folders, or x.ply and x.obj).
+        {
+            std::map<std::string, std::string> owner;
+            for (const std::string& input : inputs) {
+                const std::string out = fs::absolute(outputPathFor(*args, input)).lexically_normal().string();
+                const auto [it, fresh] = owner.emplace(out, input);
+                if (!fresh)
+                    throw InvalidInputError("'" + it->second + "' and '" + input + "' would both write " + out +
+                                            "; rename one or process them into different --output-dir folders");
+            }
         }
         std::string manifestPath = args->manifest;
         if (manifestPath.empty())
@@ -585,17 +631,31 @@ std::function<int()> addComputeCommand(CLI::App& app)
                                    {"version", versionString()},
                                    {"time", nowUtc()}};
             std::error_code ec;
-            if (!args->overwrite && fs::exists(output, ec) && fs::exists(sidecarPathFor(output), ec)) {
-                ++skipped;
-                line["status"] = "skipped";
-                line["reason"] = "output exists (--overwrite replaces it)";
+            const bool finished = fs::exists(output, ec) && fs::exists(sidecarPathFor(output), ec);
+            if (!args->overwrite && finished) {
+                // Skip it only if it was made with the same parameters.
+                const std::string differs = differentParameters(sidecarPathFor(output), *args);
+                if (differs.empty()) {
+                    ++skipped;
+                    line["status"] = "skipped";
+                    line["reason"] = "output exists (--overwrite replaces it)";
+                    manifest.add(line);
+                    continue;
+                }
+                failed.push_back(input);
+                const std::string why = "'" + output + "' exists with other parameters (" + differs +
+                                        "); use --overwrite or another --output-dir";
+                std::fprintf(stderr, "msii: error: %s: %s\n", input.c_str(), why.c_str());
+                line["status"] = "failed";
+                line["error"] = why;
                 manifest.add(line);
                 continue;
             }
             try {
-                // An output without its JSON record is from an interrupted run: redo it.
+                // An output without its JSON record (or the reverse) is from an interrupted
+                // run or was removed on purpose: redo it.
                 ComputeArgs redo = *args;
-                redo.overwrite = args->overwrite || !fs::exists(sidecarPathFor(output), ec);
+                redo.overwrite = args->overwrite || !finished;
                 const OneResult r = computeOne(redo, input, output);
                 ++done;
                 line["status"] = "done";
@@ -607,7 +667,7 @@ std::function<int()> addComputeCommand(CLI::App& app)
                 std::fprintf(stderr, "msii: error: %s: out of memory (try a larger --voxel-size)\n", input.c_str());
                 line["status"] = "failed";
                 line["error"] = "out of memory";
-            } catch (const Error& e) {
+            } catch (const std::exception& e) {  // msii's errors, and anything else: go on
                 failed.push_back(input);
                 std::fprintf(stderr, "msii: error: %s: %s\n", input.c_str(), e.what());
                 line["status"] = "failed";

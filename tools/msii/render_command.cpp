@@ -32,7 +32,8 @@ struct RenderArgs {
     std::string show;  // a property/channel, "relief" or "height"; empty: quality, else relief
     std::string colorMap;
     std::string range, percentiles = "1,99";
-    double center = NAN;
+    double center = 0;
+    CLI::Option* centerOption = nullptr;
     int isolines = 0;
     std::string levels;
     std::string light = "315,45";
@@ -156,7 +157,10 @@ int runRender(const RenderArgs& args)
         if (p.size() != 2) throw InvalidInputError("--percentiles takes LOW,HIGH (0 to 100)");
         options.loPercentile = p[0], options.hiPercentile = p[1];
     }
-    if (std::isfinite(args.center)) options.centered = true, options.center = args.center;
+    if (args.centerOption && args.centerOption->count() > 0) {
+        if (!std::isfinite(args.center)) throw InvalidInputError("--center must be a finite number");
+        options.centered = true, options.center = args.center;
+    }
 
     Progress progress(!args.quiet && Progress::stderrIsTerminal());
     Channels ch;
@@ -175,6 +179,10 @@ int runRender(const RenderArgs& args)
         }
     }
     if (show == "relief") {
+        if (!args.show.empty() && (args.isolines > 0 || !args.levels.empty() || !args.range.empty() ||
+                                   !args.colorMap.empty() || options.centered || args.shade))
+            throw InvalidInputError("--show relief is grey shading: --isolines, --levels, --range, --colormap, "
+                                    "--center and --shade apply to values (e.g. --show quality --shade)");
         options.colour = false;
         options.shade = true;
         ch = isMap ? channelsFromMap(args.input, "", true)
@@ -240,7 +248,7 @@ std::function<int()> addRenderCommand(CLI::App& app)
                     "viridis (default), cividis, gray (sequential) or coolwarm (diverging)");
     cmd->add_option("--range", args->range, "Colour range LOW,HIGH (default: --percentiles)");
     cmd->add_option("--percentiles", args->percentiles, "Colour range from percentiles LOW,HIGH (default 1,99)");
-    cmd->add_option("--center", args->center,
+    args->centerOption = cmd->add_option("--center", args->center,
                     "Make the range symmetric about this value (e.g. 0.5 for V, the flat surface)");
     cmd->add_option("--isolines", args->isolines, "Draw this many isolines evenly inside the range");
     cmd->add_option("--levels", args->levels, "Draw isolines at these values, comma-separated");

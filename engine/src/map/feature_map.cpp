@@ -17,7 +17,7 @@
 #include <Iex.h>
 
 #include <tbb/blocked_range.h>
-#include <tbb/info.h>
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -164,7 +164,8 @@ FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, con
 
     TempName temp(path);
     try {
-        Imf::setGlobalThreadCount(int(tbb::info::default_concurrency()));
+        // As many threads as TBB may use here (msii -j limits it).
+        Imf::setGlobalThreadCount(int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
         Imf::OutputFile file(temp.path().c_str(), header);
         const int numChunks = (height + kRowsPerChunk - 1) / kRowsPerChunk;
         if (progress) progress->start("writing the feature map", std::size_t(numChunks));

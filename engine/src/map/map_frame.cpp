@@ -177,21 +177,36 @@ MapFrame makeMapFrame(const TriMesh& mesh, const MapFrameOptions& options)
         std::array<Vec3, 3> vectors;
         symmetricEigen(cov, values, vectors);
         Vec3 w = normalized(vectors[0]);
-        // Face the side the surface faces (its vector area); for closed meshes (vector area
-        // about 0) the deterministic sign of canonicalSign.
-        if (std::abs(dot(vectorArea, w)) > 1e-6 * area) {
+        // Face the side the surface faces: its vector area, when that is most of the
+        // projected area (open scans); closed meshes (vector area about 0, also with a small
+        // hole) take the deterministic sign of canonicalSign.
+        double projectedArea = 0;
+        for (const Triangle& t : mesh.triangles) {
+            const Vec3 &a = mesh.points[t[0]], &b = mesh.points[t[1]], &c = mesh.points[t[2]];
+            projectedArea += 0.5 * std::abs(dot(cross(b - a, c - a), w));
+        }
+        if (std::abs(dot(vectorArea, w)) > 0.5 * projectedArea) {
             if (dot(vectorArea, w) < 0) w = -w;
         } else {
             w = canonicalSign(w);
         }
         if (options.flip) w = -w;
-        Vec3 u = canonicalSign(normalized(vectors[2] - w * dot(vectors[2], w)));
+        // u along the longest extent; when the two in-plane extents are about equal (square
+        // or round objects) that direction is noise, so take the world axis closest to the
+        // plane instead (x, else y), for a stable picture.
+        Vec3 longest = vectors[2];
+        if (values[2] < 1.1 * values[1]) {
+            longest = std::abs(w.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+        }
+        Vec3 u = normalized(longest - w * dot(longest, w));
+        if (values[2] >= 1.1 * values[1]) u = canonicalSign(u);
         frame.normal = w;
         frame.axisU = u;
         frame.axisV = cross(w, u);
     } else {
+        // The origin stays at the centroid, so that heights are small numbers (floats)
+        // even for meshes far from the world origin.
         axesOfView(options.view, options.direction, frame.axisU, frame.axisV, frame.normal);
-        frame.origin = Vec3();
     }
 
     // Projected area (empty when seen edge-on) and extent.

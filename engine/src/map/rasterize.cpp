@@ -91,6 +91,16 @@ PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, Progress* progre
                 const double area = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
                 if (area == 0 || !std::isfinite(area)) continue;
                 const double inv = 1.0 / area;
+                // Edge functions from each edge's endpoints in a fixed order (lower vertex
+                // index first), negated as needed: two triangles sharing an edge compute the
+                // same number for it, so a pixel centre on the edge is never missed by both.
+                const auto edge = [&](std::uint32_t i, std::uint32_t j, double px, double py) {
+                    const bool forward = i < j;
+                    const Projected& from = p[forward ? i : j];
+                    const Projected& to = p[forward ? j : i];
+                    const double e = (to.x - from.x) * (py - from.y) - (to.y - from.y) * (px - from.x);
+                    return forward ? e : -e;
+                };
                 const int y0 = std::max(rowLo, int(std::ceil(std::min({a.y, b.y, c.y}) - 0.5)));
                 const int y1 = std::min(rowHi, int(std::floor(std::max({a.y, b.y, c.y}) - 0.5)));
                 const int x0 = std::max(0, int(std::ceil(std::min({a.x, b.x, c.x}) - 0.5)));
@@ -99,17 +109,18 @@ PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, Progress* progre
                     const double py = y + 0.5;
                     for (int x = x0; x <= x1; ++x) {
                         const double px = x + 0.5;
-                        // Barycentric weights of b and c (signed areas over the whole).
-                        const double w1 = ((px - a.x) * (c.y - a.y) - (c.x - a.x) * (py - a.y)) * inv;
-                        const double w2 = ((b.x - a.x) * (py - a.y) - (px - a.x) * (b.y - a.y)) * inv;
-                        const double w0 = 1.0 - w1 - w2;
+                        // Barycentric weights: each vertex's opposite edge over the whole.
+                        const double w0 = edge(tri[1], tri[2], px, py) * inv;
+                        const double w1 = edge(tri[2], tri[0], px, py) * inv;
+                        const double w2 = edge(tri[0], tri[1], px, py) * inv;
                         if (w0 < 0 || w1 < 0 || w2 < 0) continue;
-                        const double h = w0 * a.h + w1 * b.h + w2 * c.h;
+                        const double sum = w0 + w1 + w2;
+                        const double h = (w0 * a.h + w1 * b.h + w2 * c.h) / sum;
                         const std::size_t i = hits.index(x, y);
                         if (hits.triangle[i] != PixelHits::kNone && !(h > hits.depth[i])) continue;
                         hits.triangle[i] = t;
-                        hits.b1[i] = float(w1);
-                        hits.b2[i] = float(w2);
+                        hits.b1[i] = float(w1 / sum);
+                        hits.b2[i] = float(w2 / sum);
                         hits.depth[i] = float(h);
                     }
                 }

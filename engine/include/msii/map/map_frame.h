@@ -15,7 +15,7 @@
 namespace msii {
 
 enum class MapView {
-    BestFit,    ///< least-squares plane of the surface (area-weighted); u along its longest extent
+    BestFit,    ///< least-squares plane of the surface (area-weighted); u along its longest extent (along x, else y, when the two in-plane extents are within 10 %)
     PlusX, MinusX, PlusY, MinusY, PlusZ, MinusZ,  ///< seen from that side, e.g. +z: looking down −z, u = +x, v = +y
     Direction,  ///< seen from `direction` (a vector from the object towards the viewer)
 };
@@ -35,7 +35,7 @@ struct MapFrameOptions {
 
 struct MapFrame {
     MapView view = MapView::BestFit;
-    Vec3 origin;                  ///< the plane's origin (area-weighted centroid for BestFit)
+    Vec3 origin;                  ///< the plane's origin: the surface's area-weighted centroid (every view)
     Vec3 axisU, axisV, normal;    ///< orthonormal, right-handed (axisU × axisV = normal)
     double pixelSize = 0;         ///< mesh units per pixel
     int width = 0, height = 0;    ///< pixels
