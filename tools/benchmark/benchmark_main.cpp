@@ -14,6 +14,7 @@
 #include <msii/mesh/read_mesh.h>
 #include <msii/samples/generators.h>
 #include <msii/map/feature_map.h>
+#include <msii/tiling/tiled_compute.h>
 #include <msii/render/annotate.h>
 #include <msii/render/picture.h>
 
@@ -62,7 +63,8 @@ int main(int argc, char** argv)
     app.add_option("--voxel-size", voxel, "finest voxel (default automatic)");
     app.add_option("--runs", runs, "runs; medians are reported (default 3)");
     app.add_option("--invariants", invariants, "which invariants, e.g. V,S (default V,S,P,L)");
-    int mapPixels = 4096, picturePixels = 2048;
+    int mapPixels = 4096, picturePixels = 2048, tiles = 2;
+    app.add_option("--tiles", tiles, "also time the compute in K x K tiles (default 2; 0: skip)");
     app.add_option("--map-pixels", mapPixels, "longer side of the EXR map, pixels (default 4096)");
     app.add_option("--picture-pixels", picturePixels, "longer side of the PNG picture, pixels (default 2048)");
     CLI11_PARSE(app, argc, argv);
@@ -82,7 +84,8 @@ int main(int argc, char** argv)
     }
     const double gen = generating.seconds();
 
-    std::vector<double> read, check, ls, occ, st, interp, samp, pl, compute, write, total;
+    std::vector<double> read, check, ls, occ, st, interp, samp, pl, compute, write, total, tiled;
+    std::size_t tiledLargest = 0;
     const auto has = [&](char c) { return invariants.find(c) != std::string::npos; };
     ComputeResult last;
     TriMesh lastMesh;
@@ -114,6 +117,15 @@ int main(int argc, char** argv)
         samp.push_back(last.timings.samples);
         pl.push_back(last.timings.patchLine);
         compute.push_back(last.timings.total);
+        if (tiles > 0) {
+            TilingOptions to;
+            to.tilesPerAxis = tiles;
+            TiledComputeInfo info;
+            const Stopwatch tiledWall;
+            const ComputeResult t = computeTiled(mesh, o, to, &info);
+            tiled.push_back(tiledWall.seconds());
+            tiledLargest = info.largestTileVertices;
+        }
         if (run + 1 == runs) lastMesh = std::move(mesh);
     }
     fs::remove_all(dir);
@@ -264,6 +276,11 @@ int main(int argc, char** argv)
     row("write result PLY", median(write), "%8.2f");
     row("**total wall, read to write**", median(total), "%8.2f");
     row("vertices per second", nv / median(total), "%8.0f");
+    if (tiles > 0)
+        row(("compute in " + std::to_string(tiles) + " x " + std::to_string(tiles) + " tiles (largest " +
+             std::to_string(tiledLargest) + " vertices with halo; bit-identical)")
+                .c_str(),
+            median(tiled), "%8.2f");
     const std::string features = std::to_string(table.dimension()) + " features";
     for (const MetricRow& m : metricRows)
         row(("metric " + m.name + ", " + features).c_str(), median(m.seconds), "%8.2f");
