@@ -477,3 +477,30 @@ TEST(MsiiCli, TiledComputeWritesTheSameFeatures)
     expectCleanFailure("'" + smallPatch() + "' -r 0.6 --memory-budget 10K", "too small for even one tile");
     expectCleanFailure("'" + smallPatch() + "' -r 0.6 --memory-budget lots", "is not a size");
 }
+
+// Tiles computed separately (one job each: --tiles K --tile I) and joined by msii merge give
+// the untiled result byte for byte; a missing or repeated tile is refused.
+TEST(MsiiCli, MergeJoinsSeparateTiles)
+{
+    const fs::path whole = tempDir() / "merge-whole.ply", merged = tempDir() / "merge-merged.ply";
+    RunResult r = runMsii("compute '" + smallPatch() + "' -r 0.6 -n 4 -q --overwrite --output '" + whole.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    std::string parts;
+    for (int t = 3; t >= 0; --t) {  // any order
+        const fs::path part = tempDir() / ("merge-part" + std::to_string(t) + ".ply");
+        r = runMsii("compute '" + smallPatch() + "' -r 0.6 -n 4 -q --overwrite --tiles 2 --tile " + std::to_string(t) +
+                    " --output '" + part.string() + "'");
+        ASSERT_EQ(r.code, 0) << r.err;
+        parts += " '" + part.string() + "'";
+    }
+    r = runMsii("merge" + parts + " -q --overwrite --output '" + merged.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(readFile(whole.string()), readFile(merged.string()));
+    const std::string p0 = "'" + (tempDir() / "merge-part0.ply").string() + "'";
+    const std::string p1 = "'" + (tempDir() / "merge-part1.ply").string() + "'";
+    expectCleanFailureOf("merge", p0 + " " + p1, "is missing");
+    expectCleanFailureOf("merge", p0 + " " + p0, "given twice");
+    expectCleanFailureOf("merge", "'" + smallPatch() + "'", "is not a tile");
+    expectCleanFailure("'" + smallPatch() + "' -r 0.6 --tiles 2 --tile 4", "does not exist");
+    expectCleanFailure("'" + smallPatch() + "' -r 0.6 --tile 1", "goes with --tiles");
+}

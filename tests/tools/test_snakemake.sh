@@ -40,8 +40,17 @@ if run --keep-going > log3.txt 2>&1; then fail "a broken scan should fail the wo
 [ ! -e results/d.msii.ply ] || fail "d.msii.ply should not exist"
 grep -q "contains no vertices" results/logs/d.compute.log || fail "d's log should say why"
 
-# Ready for a cluster: the same workflow plans its jobs for Slurm (dry run).
+# Tiles of one mesh: 2 x 2 tile jobs per scan joined by msii merge give the same PLY.
 rm scans/d.off
+snakemake --snakefile "$snakefile" --cores 2 -q --config scans=scans results=results-tiled radius=0.6 scales=4 \
+  msii="$msii" tiles=2 > log5.txt 2>&1 || { cat log5.txt; fail "the tiled workflow failed"; }
+for name in a b c; do
+  [ -s results-tiled/tiles/$name.tile3.ply ] || fail "missing tile 3 of $name"
+  cmp -s results-tiled/$name.msii.ply direct-$name.ply || fail "$name: the merged tiles differ from msii compute's"
+done
+grep -q '"tiles_per_axis": 2' results-tiled/a.msii.json || fail "the merged JSON does not record the tiles"
+
+# Ready for a cluster: the same workflow plans its jobs for Slurm (dry run).
 snakemake --snakefile "$snakefile" --slurm --jobs 10 --default-resources slurm_partition=main runtime=60 -n \
   --config scans=scans results=results-slurm radius=0.6 scales=4 msii="$msii" > log4.txt 2>&1 \
   || { cat log4.txt; fail "the Slurm dry run failed"; }

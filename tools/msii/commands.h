@@ -27,5 +27,7 @@ std::function<int()> addRenderCommand(CLI::App& app);
 std::function<int()> addSegmentCommand(CLI::App& app);
 /// Adds `msii outline` (isolines as SVG).
 std::function<int()> addOutlineCommand(CLI::App& app);
+/// Adds `msii merge` (joins tiles computed separately).
+std::function<int()> addMergeCommand(CLI::App& app);
 
 } // namespace msii::tools

@@ -54,6 +54,7 @@ struct ComputeArgs {
     bool gigamesh = false;
     std::string memoryBudget;   // e.g. "8G": tiles sized to fit
     int tiles = 0;              // tiles per axis (0: from the budget)
+    int tile = -1;              // compute only this tile (with --tiles), for merging later
     std::string manifest;       // JSON lines; default for collections: <output folder>/msii-manifest.jsonl
     bool recursive = false;     // folders: also their subfolders
 };
@@ -256,11 +257,14 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     ComputeResult result;
     TiledComputeInfo tiledInfo;
     const bool tiled = !args.exact && (!args.memoryBudget.empty() || args.tiles > 0);
+    if (args.tile >= 0 && args.tiles <= 0) throw InvalidInputError("--tile I goes with --tiles K (tiles 0 to K*K-1)");
+    if (args.tile < -1) throw InvalidInputError("--tile must be 0 or more");
     try {
         if (tiled) {
             TilingOptions tilingOptions;
             tilingOptions.memoryBudget = parseBytes(args.memoryBudget);
             tilingOptions.tilesPerAxis = args.tiles;
+            tilingOptions.onlyTile = args.tile;
             result = computeTiled(read.mesh, options, tilingOptions, &tiledInfo, &progress);
         } else {
             result = computeInvariants(read.mesh, options, &progress);
@@ -292,6 +296,9 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
             << (args.exact ? " or vertex not computed" : "") << "; quality = "
             << qualitySource(features);
     plyOptions.comments.push_back(comment.str());
+    if (args.tile >= 0)  // read by msii merge
+        plyOptions.comments.push_back("msii tile " + std::to_string(args.tile) + " of " + std::to_string(args.tiles) +
+                                      " x " + std::to_string(args.tiles) + " (other vertices NaN; msii merge joins the tiles)");
     writePly(output, read.mesh, props, plyOptions);
     if (args.gigamesh) {
         GigaMeshMatInfo info;
@@ -543,6 +550,9 @@ std::function<int()> addComputeCommand(CLI::App& app)
                     "Compute in spatial tiles sized to fit this memory (e.g. 8G); results equal the "
                     "untiled run");
     cmd->add_option("--tiles", args->tiles, "Tiles per axis (instead of sizing them from --memory-budget)");
+    cmd->add_option("--tile", args->tile,
+                    "With --tiles K: compute only tile I (0 to K*K-1), e.g. one cluster job per tile; "
+                    "msii merge joins the parts");
     cmd->add_option("--output-dir", args->outputDir,
                     "Folder for the outputs <name>.msii.ply (default: next to each input)");
     cmd->add_option("--voxel-size", args->voxelSize,

@@ -22,6 +22,7 @@ int main(int argc, char** argv)
     auto runRender = msii::tools::addRenderCommand(app);
     auto runSegment = msii::tools::addSegmentCommand(app);
     auto runOutline = msii::tools::addOutlineCommand(app);
+    auto runMerge = msii::tools::addMergeCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::Success& e) {  // --help, --help-all, --version
@@ -38,6 +39,7 @@ int main(int argc, char** argv)
         if (app.got_subcommand("render")) return runRender();
         if (app.got_subcommand("segment")) return runSegment();
         if (app.got_subcommand("outline")) return runOutline();
+        if (app.got_subcommand("merge")) return runMerge();
     } catch (const std::bad_alloc&) {
         std::cerr << "msii: error: out of memory (try a larger --voxel-size)\n";
         return 1;

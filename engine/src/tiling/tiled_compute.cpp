@@ -3,6 +3,7 @@
 #include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
 #include <msii/invariants/scales.h>
+#include <msii/mesh/mesh_stats.h>
 
 #include <algorithm>
 #include <array>
@@ -68,6 +69,15 @@ std::string gigabytes(double bytes)
 }
 
 } // namespace
+
+std::vector<int> tileOfVertices(const TriMesh& mesh, int tilesPerAxis)
+{
+    if (tilesPerAxis < 1 || tilesPerAxis > 1024) throw InvalidInputError("the tiles per axis must be between 1 and 1024");
+    const TileGrid grid = makeGrid(computeMeshStats(mesh), tilesPerAxis);
+    std::vector<int> tile(mesh.numVertices());
+    for (std::size_t i = 0; i < tile.size(); ++i) tile[i] = grid.tileOf(mesh.points[i]);
+    return tile;
+}
 
 ComputeResult computeTiled(TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
                            TiledComputeInfo* info, Progress* progress)
@@ -143,7 +153,11 @@ ComputeResult computeTiled(TriMesh& mesh, const ComputeOptions& options, const T
     tileOptions.voxelSize = plan.voxelSize;  // the whole mesh's grid, so that tiles agree
     tileOptions.repair = false;              // already done on the whole mesh
     std::size_t computed = 0;
+    if (tiling.onlyTile >= n * n)
+        throw InvalidInputError("tile " + std::to_string(tiling.onlyTile) + " does not exist (there are " +
+                                std::to_string(n * n) + " tiles, 0 to " + std::to_string(n * n - 1) + ")");
     for (int t = 0; t < n * n; ++t) {
+        if (tiling.onlyTile >= 0 && t != tiling.onlyTile) continue;
         if (std::find(tileOf.begin(), tileOf.end(), t) == tileOf.end()) continue;
         // The tile's triangles: those with a vertex in the grown tile.
         TriMesh tile;

@@ -21,7 +21,14 @@ struct TilingOptions {
     double memoryBudget = 0;
     /// Tiles along each of the two longest axes of the mesh; 0 = from the budget.
     int tilesPerAxis = 0;
+    /// Compute only this tile (0 … tiles − 1; its own vertices, the others stay NaN), e.g. one
+    /// job per tile on a cluster; -1 = all. Merge the parts with tileOfVertices().
+    int onlyTile = -1;
 };
+
+/// Which tile (0 … K² − 1) owns each vertex when @p mesh is cut into K × K tiles, as
+/// computeTiled cuts it.
+std::vector<int> tileOfVertices(const TriMesh& mesh, int tilesPerAxis);
 
 /// Peak bytes per vertex of one computation at N = 16 with all four invariants (measured:
 /// 1.8 GB for 1.1M vertices), used to size tiles.

@@ -1,0 +1,93 @@
+/// `msii merge PART... -o OUT.ply`: joins the tiles of one mesh computed separately
+/// (`msii compute --tiles K --tile I`, e.g. one cluster job each) into the result of the
+/// whole mesh, equal to computing it in one piece.
+#include "commands.h"
+#include "feature_input.h"
+
+#include <msii/core/errors.h>
+#include <msii/core/stopwatch.h>
+#include <msii/io/write_ply.h>
+#include <msii/tiling/tiled_compute.h>
+
+#include <cstdio>
+#include <memory>
+#include <regex>
+#include <set>
+
+namespace msii::tools {
+
+namespace {
+
+struct MergeArgs {
+    std::vector<std::string> parts;
+    std::string output;
+    bool quiet = false, overwrite = false;
+};
+
+int runMerge(const MergeArgs& args)
+{
+    const Stopwatch total;
+    const std::string output = outputPath(args.parts.front(), args.output, "merged", args.overwrite);
+    static const std::regex tileLine(R"(^msii tile ([0-9]+) of ([0-9]+) x ([0-9]+))");
+    FeatureMesh merged;
+    std::vector<int> owner;
+    std::set<int> seen;
+    int tilesPerAxis = 0;
+    for (const std::string& part : args.parts) {
+        FeatureMesh in = readFeatureMesh(part, {});
+        int tile = -1, k = 0;
+        std::vector<std::string> kept;
+        for (const std::string& c : in.comments) {
+            std::smatch m;
+            if (std::regex_search(c, m, tileLine)) tile = std::stoi(m[1].str()), k = std::stoi(m[2].str());
+            else kept.push_back(c);
+        }
+        if (tile < 0) throw InvalidInputError(part + " is not a tile of msii compute --tiles K --tile I");
+        if (merged.properties.empty()) {
+            tilesPerAxis = k;
+            owner = tileOfVertices(in.mesh, k);
+            merged = std::move(in);
+            merged.comments = kept;
+        } else {
+            if (k != tilesPerAxis || in.mesh.numVertices() != merged.mesh.numVertices() ||
+                in.mesh.points != merged.mesh.points || in.properties.size() != merged.properties.size())
+                throw InvalidInputError(part + " is not a tile of the same mesh and run as " + args.parts.front());
+            for (std::size_t q = 0; q < in.properties.size(); ++q) {
+                if (in.properties[q].name != merged.properties[q].name)
+                    throw InvalidInputError(part + " has other features than " + args.parts.front());
+                for (std::size_t i = 0; i < owner.size(); ++i)
+                    if (owner[i] == tile) merged.properties[q].values[i] = in.properties[q].values[i];
+            }
+        }
+        if (!seen.insert(tile).second) throw InvalidInputError("tile " + std::to_string(tile) + " is given twice");
+    }
+    // Every tile that owns a vertex must be there.
+    for (int t : std::set<int>(owner.begin(), owner.end()))
+        if (!seen.count(t))
+            throw InvalidInputError("tile " + std::to_string(t) + " of " + std::to_string(tilesPerAxis) + " x " +
+                                    std::to_string(tilesPerAxis) + " is missing");
+    WritePlyOptions plyOptions;
+    plyOptions.comments = merged.comments;
+    writePly(output, merged.mesh, merged.properties, plyOptions);
+    if (!args.quiet)
+        std::fprintf(stderr, "msii: %zu tiles -> %s (%zu vertices, %.1f s)\n", args.parts.size(), output.c_str(),
+                     merged.mesh.numVertices(), total.seconds());
+    return 0;
+}
+
+} // namespace
+
+std::function<int()> addMergeCommand(CLI::App& app)
+{
+    auto args = std::make_shared<MergeArgs>();
+    CLI::App* cmd = app.add_subcommand(
+        "merge", "Join the tiles of one mesh computed separately (msii compute --tiles K --tile I) into "
+                 "the whole result, equal to computing it in one piece.");
+    cmd->add_option("parts", args->parts, "The tiles' PLY files (any order)")->required();
+    cmd->add_option("-o,--output", args->output, "Output PLY (default <first part's stem>.merged.ply)");
+    cmd->add_flag("-q,--quiet", args->quiet, "Errors only");
+    cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output");
+    return [args]() { return runMerge(*args); };
+}
+
+} // namespace msii::tools
