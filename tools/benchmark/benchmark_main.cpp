@@ -23,6 +23,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -217,22 +218,10 @@ int main(int argc, char** argv)
             }
             const Stopwatch t;
             const PixelHits hits = rasterize(lastMesh, pictureFrame);
-            const std::size_t np = hits.triangle.size();
-            std::vector<float> value(np), mask(np), n3[3];
-            const std::vector<Vec3> normals = vertexNormals(lastMesh);
-            std::vector<float> comp[3];
-            for (auto& c : comp) c.resize(nv);
-            for (std::size_t i = 0; i < nv; ++i) {
-                comp[0][i] = float(dot(normals[i], pictureFrame.axisU));
-                comp[1][i] = float(dot(normals[i], pictureFrame.axisV));
-                comp[2][i] = float(dot(normals[i], pictureFrame.normal));
-            }
-            for (auto& c : n3) c.resize(np);
-            for (std::size_t k = 0; k < np; ++k) {
-                value[k] = hits.interpolate(lastMesh, quality, k);
-                mask[k] = hits.triangle[k] != PixelHits::kNone ? 1.0f : 0.0f;
-                for (int a = 0; a < 3; ++a) n3[a][k] = hits.interpolate(lastMesh, comp[a], k);
-            }
+            const std::vector<float> value = interpolateToPixels(lastMesh, hits, quality), mask = coverageMask(hits);
+            const std::array<std::vector<float>, 3> normals = vertexNormalsInFrame(lastMesh, pictureFrame);
+            std::vector<float> n3[3];
+            for (std::size_t a = 0; a < 3; ++a) n3[a] = interpolateToPixels(lastMesh, hits, normals[a]);
             PictureChannels pc;
             pc.width = hits.width, pc.height = hits.height;
             pc.value = &value, pc.mask = &mask, pc.nx = &n3[0], pc.ny = &n3[1], pc.nz = &n3[2];

@@ -564,7 +564,8 @@ std::function<int()> addComputeCommand(CLI::App& app)
     cmd->add_flag("-q,--quiet", args->quiet, "No progress, no summary; errors only");
     cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs");
     cmd->add_flag("--repair", args->repair,
-                  "Drop degenerate and duplicate faces instead of stopping");
+                  "Drop degenerate and duplicate faces, and the faces around non-manifold edges, "
+                  "instead of stopping");
     cmd->add_option("--invariants", args->invariants,
                     "Which invariants, comma-separated (default V,S,P,L)");
     cmd->add_flag("--no-sphere", args->noSphere, "Leave out S (same as omitting it from --invariants)");
@@ -629,6 +630,13 @@ std::function<int()> addComputeCommand(CLI::App& app)
         std::size_t done = 0, skipped = 0;
         std::vector<std::string> failed;
         const bool terminal = !args->quiet && Progress::stderrIsTerminal();
+        // A failed input: one error line, and the reason in its manifest line.
+        const auto fail = [&](const std::string& input, nlohmann::json& line, const std::string& why) {
+            failed.push_back(input);
+            std::fprintf(stderr, "msii: error: %s: %s\n", input.c_str(), why.c_str());
+            line["status"] = "failed";
+            line["error"] = why;
+        };
         for (std::size_t k = 0; k < inputs.size(); ++k) {
             const std::string& input = inputs[k];
             const std::string output = outputPathFor(*args, input);
@@ -652,12 +660,8 @@ std::function<int()> addComputeCommand(CLI::App& app)
                     manifest.add(line);
                     continue;
                 }
-                failed.push_back(input);
-                const std::string why = "'" + output + "' exists with other parameters (" + differs +
-                                        "); use --overwrite or another --output-dir";
-                std::fprintf(stderr, "msii: error: %s: %s\n", input.c_str(), why.c_str());
-                line["status"] = "failed";
-                line["error"] = why;
+                fail(input, line, "'" + output + "' exists with other parameters (" + differs +
+                                      "); use --overwrite or another --output-dir");
                 manifest.add(line);
                 continue;
             }
@@ -673,15 +677,9 @@ std::function<int()> addComputeCommand(CLI::App& app)
                 line["voxel_size"] = r.voxelSize;
                 line["seconds"] = r.seconds;
             } catch (const std::bad_alloc&) {
-                failed.push_back(input);
-                std::fprintf(stderr, "msii: error: %s: out of memory (try a larger --voxel-size)\n", input.c_str());
-                line["status"] = "failed";
-                line["error"] = "out of memory";
+                fail(input, line, "out of memory (try a larger --voxel-size)");
             } catch (const std::exception& e) {  // msii's errors, and anything else: go on
-                failed.push_back(input);
-                std::fprintf(stderr, "msii: error: %s: %s\n", input.c_str(), e.what());
-                line["status"] = "failed";
-                line["error"] = e.what();
+                fail(input, line, e.what());
             }
             manifest.add(line);
         }

@@ -15,14 +15,13 @@ namespace fs = std::filesystem;
 
 namespace msii::tools {
 
-namespace {
-/// "V_07": a feature of invariant @p letter.
-bool isFeatureOf(const std::string& name, char letter)
+bool isFeatureName(const std::string& name, char letter)
 {
-    return name.size() >= 4 && name[0] == letter && name[1] == '_' &&
+    if (name.size() < 4 || name[1] != '_') return false;
+    const bool letterOk = letter != 0 ? name[0] == letter : std::string("VSPL").find(name[0]) != std::string::npos;
+    return letterOk &&
            std::all_of(name.begin() + 2, name.end(), [](unsigned char c) { return std::isdigit(c); });
 }
-} // namespace
 
 FeatureMesh readFeatureMesh(const std::string& input, const std::vector<std::string>& matFiles)
 {
@@ -38,7 +37,7 @@ FeatureMesh readFeatureMesh(const std::string& input, const std::vector<std::str
         const char letter = add.front().name[0];
         // A .mat replaces the whole feature vector of its invariant, whatever its length.
         out.properties.erase(std::remove_if(out.properties.begin(), out.properties.end(),
-                                            [&](const VertexProperty& p) { return isFeatureOf(p.name, letter); }),
+                                            [&](const VertexProperty& p) { return isFeatureName(p.name, letter); }),
                              out.properties.end());
         mergeProperties(out.properties, std::move(add));
     }

@@ -18,6 +18,9 @@ struct FeatureMesh {
 /// features by those of each GigaMesh `.mat` file in @p matFiles.
 FeatureMesh readFeatureMesh(const std::string& input, const std::vector<std::string>& matFiles);
 
+/// "V_07": a feature element of invariant @p letter (V, S, P or L; 0 = any of them).
+bool isFeatureName(const std::string& name, char letter = 0);
+
 /// The index of vertex property @p name in @p in.properties.
 /// @throw InvalidInputError naming the properties the input has.
 std::size_t findProperty(const FeatureMesh& in, const std::string& name);

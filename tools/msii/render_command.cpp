@@ -64,11 +64,13 @@ std::string available(const std::vector<std::string>& names)
     return s.empty() ? "none" : s;
 }
 
-Channels channelsFromMap(const std::string& path, const std::string& value, bool needNormals)
+/// The channels of an EXR map: mask, @p value (unless empty) and, if asked, the normals.
+/// With @p orRelief a missing value is no error: the normals are read instead, for the relief.
+Channels channelsFromMap(const std::string& path, const std::string& value, bool needNormals, bool orRelief = false)
 {
     std::vector<std::string> wanted{"mask"};
     if (!value.empty()) wanted.push_back(value);
-    if (needNormals) wanted.insert(wanted.end(), {"normal.x", "normal.y", "normal.z"});
+    if (needNormals || orRelief) wanted.insert(wanted.end(), {"normal.x", "normal.y", "normal.z"});
     FeatureMapImage map = readFeatureMap(path, wanted);
     Channels c;
     c.width = map.width, c.height = map.height;
@@ -78,7 +80,7 @@ Channels channelsFromMap(const std::string& path, const std::string& value, bool
     for (const std::string& w : wanted) {
         auto it = map.channels.find(w);
         if (it == map.channels.end()) {
-            if (w == "mask") continue;
+            if (w == "mask" || (orRelief && w == value)) continue;
             throw InvalidInputError("the map has no channel '" + w + "' (it has: " + available(names) + ")");
         }
         c.data[w] = std::move(it->second);
@@ -86,42 +88,30 @@ Channels channelsFromMap(const std::string& path, const std::string& value, bool
     return c;
 }
 
-Channels channelsFromMesh(const std::string& path, const std::vector<std::string>& matFiles,
-                          const ViewArgs& view, const std::string& value, bool needNormals, Progress* progress)
+/// The same channels from a mesh rasterised into the frame the view options ask for.
+Channels channelsFromMesh(const std::string& path, const std::vector<std::string>& matFiles, const ViewArgs& view,
+                          const std::string& value, bool needNormals, Progress* progress, bool orRelief = false)
 {
     const MapFrameOptions frameOpts = frameOptions(view, kDefaultPixels);
     FeatureMesh in = readFeatureMesh(path, matFiles);
     const VertexProperty* property = nullptr;
-    if (!value.empty() && value != "height") property = &in.properties[findProperty(in, value)];
+    if (!value.empty() && value != "height") {
+        const bool present = std::any_of(in.properties.begin(), in.properties.end(),
+                                         [&](const VertexProperty& p) { return p.name == value; });
+        if (present || !orRelief) property = &in.properties[findProperty(in, value)];
+        else needNormals = true;  // the relief instead
+    }
     const MapFrame frame = makeMapFrame(in.mesh, frameOpts);
     const PixelHits hits = rasterize(in.mesh, frame, progress);
     Channels c;
     c.width = frame.width, c.height = frame.height, c.pixelSize = frame.pixelSize;
-    const std::size_t n = hits.triangle.size();
-    auto& mask = c.data["mask"];
-    mask.resize(n);
-    for (std::size_t k = 0; k < n; ++k) mask[k] = hits.triangle[k] != PixelHits::kNone ? 1.0f : 0.0f;
+    c.data["mask"] = coverageMask(hits);
     if (value == "height") c.data["height"] = hits.depth;
-    if (property) {
-        auto& v = c.data[value];
-        v.resize(n);
-        for (std::size_t k = 0; k < n; ++k) v[k] = hits.interpolate(in.mesh, property->values, k);
-    }
+    if (property) c.data[value] = interpolateToPixels(in.mesh, hits, property->values);
     if (needNormals) {
-        const std::vector<Vec3> normals = vertexNormals(in.mesh);
-        std::vector<float> comp[3];
-        for (auto& cc : comp) cc.resize(normals.size());
-        for (std::size_t i = 0; i < normals.size(); ++i) {
-            comp[0][i] = float(dot(normals[i], frame.axisU));
-            comp[1][i] = float(dot(normals[i], frame.axisV));
-            comp[2][i] = float(dot(normals[i], frame.normal));
-        }
+        const std::array<std::vector<float>, 3> normals = vertexNormalsInFrame(in.mesh, frame);
         const char* names[3] = {"normal.x", "normal.y", "normal.z"};
-        for (int a = 0; a < 3; ++a) {
-            auto& v = c.data[names[a]];
-            v.resize(n);
-            for (std::size_t k = 0; k < n; ++k) v[k] = hits.interpolate(in.mesh, comp[a], k);
-        }
+        for (std::size_t a = 0; a < 3; ++a) c.data[names[a]] = interpolateToPixels(in.mesh, hits, normals[a]);
     }
     return c;
 }
@@ -163,21 +153,14 @@ int runRender(const RenderArgs& args)
     }
 
     Progress progress(!args.quiet && Progress::stderrIsTerminal());
-    Channels ch;
     std::string value;
-    if (show.empty()) {
-        // quality when the input has it
-        show = "quality";
-        try {
-            ch = isMap ? channelsFromMap(args.input, show, args.shade)
-                       : channelsFromMesh(args.input, args.matFiles, args.view, show, args.shade, &progress);
-        } catch (const InvalidInputError& e) {
-            if (std::string(e.what()).find("no vertex property 'quality'") == std::string::npos &&
-                std::string(e.what()).find("no channel 'quality'") == std::string::npos)
-                throw;
-            show = "relief";
-        }
-    }
+    // Default: quality when the input has it, else the relief (read in one go).
+    const bool automatic = show.empty();
+    const std::string wanted = automatic ? "quality" : show == "relief" ? "" : show;
+    const bool needNormals = show == "relief" || args.shade;
+    Channels ch = isMap ? channelsFromMap(args.input, wanted, needNormals, automatic)
+                        : channelsFromMesh(args.input, args.matFiles, args.view, wanted, needNormals, &progress, automatic);
+    if (automatic) show = ch.data.count("quality") ? "quality" : "relief";
     if (show == "relief") {
         if (!args.show.empty() && (args.isolines > 0 || !args.levels.empty() || !args.range.empty() ||
                                    !args.colorMap.empty() || options.centered || args.shade))
@@ -185,14 +168,9 @@ int runRender(const RenderArgs& args)
                                     "--center and --shade apply to values (e.g. --show quality --shade)");
         options.colour = false;
         options.shade = true;
-        ch = isMap ? channelsFromMap(args.input, "", true)
-                   : channelsFromMesh(args.input, args.matFiles, args.view, "", true, &progress);
     } else {
         value = show;
         options.shade = args.shade;
-        if (ch.data.empty())
-            ch = isMap ? channelsFromMap(args.input, value, args.shade)
-                       : channelsFromMesh(args.input, args.matFiles, args.view, value, args.shade, &progress);
     }
     if (!args.units.empty()) ch.units = args.units;
     const std::string output = outputPath(args.input, args.output, show, args.overwrite, ".png");

@@ -117,11 +117,9 @@ int runOutline(const OutlineArgs& args)
     FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
     const VertexProperty& f = in.properties[findProperty(in, args.property)];
     if (args.count > 0) {
-        std::stringstream p(args.percentiles);
-        double lo = 0, hi = 0;
-        char comma = 0;
-        if (!(p >> lo >> comma >> hi) || comma != ',') throw InvalidInputError("--percentiles takes LOW,HIGH");
-        const ValueRange r = percentileRange(f.values, lo, hi);
+        const std::vector<double> p = parseNumberList(args.percentiles, "--percentiles");
+        if (p.size() != 2) throw InvalidInputError("--percentiles takes LOW,HIGH");
+        const ValueRange r = percentileRange(f.values, p[0], p[1]);
         for (double l : evenLevels(r.lo, r.hi, args.count)) levels.push_back(l);
     }
     const MapFrame frame = makeMapFrame(in.mesh, frameOpts);

@@ -55,11 +55,6 @@ SmoothingOptions smoothingOptions(const SmoothArgs& args)
     return o;
 }
 
-bool isFeatureName(const std::string& name)
-{
-    return name.size() >= 4 && std::string("VSPL").find(name[0]) != std::string::npos && name[1] == '_' &&
-           std::all_of(name.begin() + 2, name.end(), [](unsigned char c) { return std::isdigit(c); });
-}
 
 int runSmooth(const SmoothArgs& args)
 {

@@ -3,6 +3,7 @@
 #include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
 #include <msii/invariants/scales.h>
+#include <msii/mesh/vertex_normals.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -567,21 +568,6 @@ void removeCurvatureBlur(std::vector<std::vector<float>>& values, const std::vec
     });
 }
 
-/// Unit vertex normals: sums of the incident faces' vector areas.
-std::vector<Vec3> areaWeightedNormals(const TriMesh& mesh)
-{
-    std::vector<Vec3> normal(mesh.numVertices());
-    for (const Triangle& t : mesh.triangles) {
-        const Vec3 area = cross(mesh.points[t[1]] - mesh.points[t[0]], mesh.points[t[2]] - mesh.points[t[0]]);
-        for (std::uint32_t v : t) normal[v] += area;
-    }
-    for (Vec3& n : normal) {
-        const double len = norm(n);
-        n = len > 0 ? n / len : Vec3(0, 0, 1);
-    }
-    return normal;
-}
-
 } // namespace
 
 PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& options,
@@ -704,7 +690,7 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
             std::vector<Vec3> at(numSamples);
             for (std::size_t s = 0; s < numSamples; ++s) at[s] = Vec3(level.cx[s], level.cy[s], level.cz[s]);
             evaluatePoints(level, kernel, h0, at, std::vector<char>(numSamples, 0), sumP, sumL, progress);
-            if (vertexNormal.empty()) vertexNormal = areaWeightedNormals(mesh);
+            if (vertexNormal.empty()) vertexNormal = vertexNormals(mesh, Vec3(0, 0, 1));
             const int nr = int(levelRadii.size());
             std::vector<float> atP(std::size_t(nr) * nv), atL(std::size_t(nr) * nv);
             std::vector<const float*> from;

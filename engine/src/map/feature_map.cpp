@@ -2,6 +2,7 @@
 
 #include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
+#include <msii/io/atomic_file.h>
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
@@ -21,11 +22,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <set>
-#include <unistd.h>
 
 namespace msii {
 namespace {
@@ -48,38 +47,6 @@ Imf::Compression toImf(ExrCompression c)
 
 Imath::V3d v3(const Vec3& v) { return Imath::V3d(v.x, v.y, v.z); }
 Vec3 vec(const Imath::V3d& v) { return Vec3(v.x, v.y, v.z); }
-
-/// A temporary name next to @p target; removed unless released.
-class TempName {
-public:
-    explicit TempName(const std::string& target)
-    {
-        static std::atomic<int> counter{0};
-        const fs::path t(target);
-        mPath = (t.parent_path() / ("." + t.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
-                                    std::to_string(counter++)))
-                    .string();
-    }
-    ~TempName()
-    {
-        if (!mReleased) {
-            std::error_code ec;
-            fs::remove(mPath, ec);
-        }
-    }
-    const std::string& path() const { return mPath; }
-    void renameTo(const std::string& target)
-    {
-        std::error_code ec;
-        fs::rename(mPath, target, ec);
-        if (ec) throw IOError("cannot write " + target + ": " + ec.message());
-        mReleased = true;
-    }
-
-private:
-    std::string mPath;
-    bool mReleased = false;
-};
 
 } // namespace
 
@@ -116,13 +83,11 @@ FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, con
     const std::size_t nv = mesh.numVertices(), numValues = 3 + properties.size();
     std::vector<float> table(nv * numValues);
     {
-        const std::vector<Vec3> n = vertexNormals(mesh);
+        const std::array<std::vector<float>, 3> n = vertexNormalsInFrame(mesh, frame);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
                 float* row = table.data() + i * numValues;
-                row[0] = float(dot(n[i], frame.axisU));
-                row[1] = float(dot(n[i], frame.axisV));
-                row[2] = float(dot(n[i], frame.normal));
+                for (int c = 0; c < 3; ++c) row[c] = n[std::size_t(c)][i];
                 for (std::size_t q = 0; q < properties.size(); ++q) row[3 + q] = properties[q].values[i];
             }
         });
@@ -162,11 +127,12 @@ FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, con
     std::vector<std::uint16_t> bandHalf;  // half bits when options.half
     if (options.half) bandHalf.resize(nc * chunkPixels);
 
-    TempName temp(path);
+    // The temporary file of AtomicFile, written by OpenEXR, renamed on commit.
+    AtomicFile temp(path);
     try {
         // As many threads as TBB may use here (msii -j limits it).
         Imf::setGlobalThreadCount(int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
-        Imf::OutputFile file(temp.path().c_str(), header);
+        Imf::OutputFile file(temp.temporaryPath().c_str(), header);
         const int numChunks = (height + kRowsPerChunk - 1) / kRowsPerChunk;
         if (progress) progress->start("writing the feature map", std::size_t(numChunks));
         const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -222,7 +188,7 @@ FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, con
     } catch (const Iex::BaseExc& e) {
         throw IOError("cannot write " + path + ": " + e.what());
     }
-    temp.renameTo(path);
+    temp.commit();
     info.writeSeconds = stage.seconds();
     for (auto it = header.channels().begin(); it != header.channels().end(); ++it) info.channels.push_back(it.name());
     return info;

@@ -1,5 +1,7 @@
 #include <msii/map/rasterize.h>
 
+#include <msii/mesh/vertex_normals.h>
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -17,18 +19,35 @@ struct Projected {
 
 } // namespace
 
-std::vector<Vec3> vertexNormals(const TriMesh& mesh)
+std::array<std::vector<float>, 3> vertexNormalsInFrame(const TriMesh& mesh, const MapFrame& frame)
 {
-    std::vector<Vec3> normal(mesh.numVertices());
-    for (const Triangle& t : mesh.triangles) {
-        const Vec3 a = cross(mesh.points[t[1]] - mesh.points[t[0]], mesh.points[t[2]] - mesh.points[t[0]]);
-        for (std::uint32_t v : t) normal[v] += a;
-    }
-    for (Vec3& n : normal) {
-        const double len = norm(n);
-        n = len > 0 ? n / len : Vec3();
-    }
-    return normal;
+    const std::vector<Vec3> n = vertexNormals(mesh);
+    std::array<std::vector<float>, 3> out;
+    for (auto& c : out) c.resize(n.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n.size()), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            out[0][i] = float(dot(n[i], frame.axisU));
+            out[1][i] = float(dot(n[i], frame.axisV));
+            out[2][i] = float(dot(n[i], frame.normal));
+        }
+    });
+    return out;
+}
+
+std::vector<float> interpolateToPixels(const TriMesh& mesh, const PixelHits& hits, const std::vector<float>& perVertex)
+{
+    std::vector<float> out(hits.triangle.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size()), [&](const auto& r) {
+        for (std::size_t k = r.begin(); k < r.end(); ++k) out[k] = hits.interpolate(mesh, perVertex, k);
+    });
+    return out;
+}
+
+std::vector<float> coverageMask(const PixelHits& hits)
+{
+    std::vector<float> mask(hits.triangle.size());
+    for (std::size_t k = 0; k < mask.size(); ++k) mask[k] = hits.triangle[k] != PixelHits::kNone ? 1.0f : 0.0f;
+    return mask;
 }
 
 PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, Progress* progress)
@@ -94,12 +113,19 @@ PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, Progress* progre
                 // Edge functions from each edge's endpoints in a fixed order (lower vertex
                 // index first), negated as needed: two triangles sharing an edge compute the
                 // same number for it, so a pixel centre on the edge is never missed by both.
-                const auto edge = [&](std::uint32_t i, std::uint32_t j, double px, double py) {
+                // Edge k is the one opposite corner k; its set-up is per triangle.
+                struct Edge {
+                    double x, y, dx, dy, sign;
+                };
+                const auto setUp = [&](std::uint32_t i, std::uint32_t j) {
                     const bool forward = i < j;
                     const Projected& from = p[forward ? i : j];
                     const Projected& to = p[forward ? j : i];
-                    const double e = (to.x - from.x) * (py - from.y) - (to.y - from.y) * (px - from.x);
-                    return forward ? e : -e;
+                    return Edge{from.x, from.y, to.x - from.x, to.y - from.y, forward ? 1.0 : -1.0};
+                };
+                const Edge edges[3] = {setUp(tri[1], tri[2]), setUp(tri[2], tri[0]), setUp(tri[0], tri[1])};
+                const auto edge = [](const Edge& e, double px, double py) {
+                    return e.sign * (e.dx * (py - e.y) - e.dy * (px - e.x));
                 };
                 const int y0 = std::max(rowLo, int(std::ceil(std::min({a.y, b.y, c.y}) - 0.5)));
                 const int y1 = std::min(rowHi, int(std::floor(std::max({a.y, b.y, c.y}) - 0.5)));
@@ -110,9 +136,9 @@ PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, Progress* progre
                     for (int x = x0; x <= x1; ++x) {
                         const double px = x + 0.5;
                         // Barycentric weights: each vertex's opposite edge over the whole.
-                        const double w0 = edge(tri[1], tri[2], px, py) * inv;
-                        const double w1 = edge(tri[2], tri[0], px, py) * inv;
-                        const double w2 = edge(tri[0], tri[1], px, py) * inv;
+                        const double w0 = edge(edges[0], px, py) * inv;
+                        const double w1 = edge(edges[1], px, py) * inv;
+                        const double w2 = edge(edges[2], px, py) * inv;
                         if (w0 < 0 || w1 < 0 || w2 < 0) continue;
                         const double sum = w0 + w1 + w2;
                         const double h = (w0 * a.h + w1 * b.h + w2 * c.h) / sum;

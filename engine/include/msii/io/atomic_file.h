@@ -21,6 +21,9 @@ public:
     void write(const std::string& text) { write(text.data(), text.size()); }
     /// Flushes, closes and renames onto the target. @throw IOError
     void commit();
+    /// The temporary file, for writers that open it themselves (e.g. OpenEXR): write it
+    /// there without calling write(), then commit() renames it onto the target.
+    const std::string& temporaryPath() const { return mTemp; }
 
 private:
     std::string mTarget, mTemp;

@@ -6,8 +6,10 @@
 
 #include <msii/core/progress.h>
 #include <msii/map/map_frame.h>
+#include <msii/mesh/vertex_normals.h>
 #include <msii/mesh/trimesh.h>
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -40,7 +42,14 @@ struct PixelHits {
 /// thread count.
 PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, Progress* progress = nullptr);
 
-/// Unit vertex normals (sums of the incident triangles' vector areas).
-std::vector<Vec3> vertexNormals(const TriMesh& mesh);
+/// Unit vertex normals (mesh/vertex_normals.h) in the map frame: x along axisU, y along
+/// axisV, z towards the viewer; zero for vertices without area.
+std::array<std::vector<float>, 3> vertexNormalsInFrame(const TriMesh& mesh, const MapFrame& frame);
+
+/// A per-vertex field at every pixel (PixelHits::interpolate; NaN for background).
+std::vector<float> interpolateToPixels(const TriMesh& mesh, const PixelHits& hits, const std::vector<float>& perVertex);
+
+/// 1 where the pixel sees the mesh, 0 elsewhere.
+std::vector<float> coverageMask(const PixelHits& hits);
 
 } // namespace msii
