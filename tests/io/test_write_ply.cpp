@@ -206,6 +206,92 @@ TEST(WritePly, LargeMeshWithManyPropertiesRoundTrips)
 // ---------------------------------------------------------------------------------------
 // AtomicFile
 
+// PlyPieceWriter (issue 6: results larger than memory are written tile by tile): pieces in
+// any order give the bytes of writePly; vertices never given are NaN; nothing appears before
+// commit(), and an abandoned writer leaves no file.
+TEST(PlyPieceWriter, PiecesInAnyOrderGiveTheBytesOfWritePly)
+{
+    TempDir dir;
+    // A strip of 300 vertices (runs of consecutive vertices and single ones), 2 properties.
+    TriMesh mesh;
+    std::vector<VertexProperty> properties = {{"V_01", {}}, {"quality", {}}};
+    for (int i = 0; i < 300; ++i) {
+        mesh.points.push_back({0.1 * i, (i % 2) * 0.7, std::sin(0.05 * i)});
+        properties[0].values.push_back(float(i) / 7.0f);
+        properties[1].values.push_back(i % 11 == 0 ? std::numeric_limits<float>::quiet_NaN() : -float(i));
+    }
+    for (std::uint32_t i = 0; i + 2 < 300; ++i) mesh.triangles.push_back({i, i + 1 + (i % 2), i + 2 - (i % 2)});
+    for (bool doublePoints : {false, true}) {
+        WritePlyOptions options;
+        options.forceDoublePoints = doublePoints;
+        options.comments = {"msii test"};
+        writePly(dir.file("whole.ply"), mesh, properties, options);
+        fs::remove(dir.file("pieces.ply"));
+        {
+            PlyPieceWriter pieces(dir.file("pieces.ply"), mesh, {"V_01", "quality"}, options);
+            // Three pieces, last vertices first; vertex 0 is part of the second piece.
+            const std::vector<std::vector<std::uint32_t>> parts = {
+                {200, 201, 202, 250, 251, 299}, {0, 1, 2, 3, 150}, {}};
+            std::vector<bool> given(300, false);
+            for (const auto& part : parts)
+                for (std::uint32_t v : part) given[v] = true;
+            std::vector<std::uint32_t> rest;
+            for (std::uint32_t v = 0; v < 300; ++v)
+                if (!given[v]) rest.push_back(v);
+            std::vector<std::vector<std::uint32_t>> all = parts;
+            all.push_back(rest);
+            for (const auto& part : all) {
+                std::vector<float> a, b;
+                for (std::uint32_t v : part) a.push_back(properties[0].values[v]), b.push_back(properties[1].values[v]);
+                pieces.write(part, {a.data(), b.data()});
+            }
+            EXPECT_FALSE(fs::exists(dir.file("pieces.ply")));
+            pieces.commit();
+        }
+        EXPECT_EQ(readFile(dir.file("pieces.ply")), readFile(dir.file("whole.ply"))) << "double points " << doublePoints;
+    }
+
+    // Vertices never given are NaN; the rest as given.
+    {
+        PlyPieceWriter pieces(dir.file("partial.ply"), mesh, {"V_01"});
+        const float value[2] = {0.25f, 0.5f};
+        pieces.write({7, 8}, {value});
+        pieces.commit();
+    }
+    ReadMeshOptions keep;
+    keep.keepVertexProperties = true;
+    const ReadMeshResult partial = readPly(dir.file("partial.ply"), keep);
+    ASSERT_EQ(partial.vertexProperties.size(), 1u);
+    EXPECT_EQ(partial.mesh.points.size(), 300u);
+    EXPECT_EQ(partial.mesh.triangles, mesh.triangles);
+    const std::vector<float>& v = partial.vertexProperties[0].values;
+    EXPECT_EQ(v[7], 0.25f);
+    EXPECT_EQ(v[8], 0.5f);
+    std::size_t nans = 0;
+    for (float x : v) nans += std::isnan(x);
+    EXPECT_EQ(nans, 298u);
+
+    // Abandoned (e.g. a tile failed): no file, no temporary.
+    {
+        PlyPieceWriter pieces(dir.file("abandoned.ply"), mesh, {"V_01"});
+        const float value = 1;
+        pieces.write({3}, {&value});
+    }
+    EXPECT_FALSE(fs::exists(dir.file("abandoned.ply")));
+    for (const auto& entry : fs::directory_iterator(dir.path()))
+        EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+
+    // Misuse is refused.
+    PlyPieceWriter pieces(dir.file("misuse.ply"), mesh, {"V_01"});
+    const float value = 1;
+    EXPECT_THROW(pieces.write({300}, {&value}), InvalidInputError);
+    EXPECT_THROW(pieces.write({3}, {}), InvalidInputError);
+    WritePlyOptions ascii;
+    ascii.binary = false;
+    EXPECT_THROW(PlyPieceWriter(dir.file("ascii.ply"), mesh, {"V_01"}, ascii), InvalidInputError);
+    EXPECT_THROW(PlyPieceWriter(dir.file("bad.ply"), mesh, {"two words"}), InvalidInputError);
+}
+
 TEST(AtomicFile, CommitReplacesTargetAndLeavesNoTemporary)
 {
     TempDir dir;

@@ -259,13 +259,55 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     const bool tiled = !args.exact && (!args.memoryBudget.empty() || args.tiles > 0);
     if (args.tile >= 0 && args.tiles <= 0) throw InvalidInputError("--tile I goes with --tiles K (tiles 0 to K*K-1)");
     if (args.tile < -1) throw InvalidInputError("--tile must be 0 or more");
+
+    // The PLY's header comments, from a result (the whole one or a tile's: same plan).
+    std::string qualityName;  // e.g. "V_16"
+    const auto plyOptionsFor = [&](const ComputeResult& r) {
+        qualityName = qualitySource(featuresOf(r.invariants, r.patchLine));
+        WritePlyOptions plyOptions;
+        std::ostringstream comment;
+        comment << "msii " << versionString() << " compute" << (args.exact ? " --exact" : "")
+                << " R=" << args.radius << " N=" << r.invariants.radii.size() << " voxel=" << r.voxelSize
+                << "; V_jj = V/|B_r|, S_jj = S/(4 pi r^2) (plane 0.5), P_jj = P/(pi r^2), L_jj = "
+                   "L/(2 pi r) (plane 1), r_j = j*R/N; NaN = ball reaches the border"
+                << (args.exact ? " or vertex not computed" : "") << "; quality = " << qualityName;
+        plyOptions.comments.push_back(comment.str());
+        if (args.tile >= 0)  // read by msii merge
+            plyOptions.comments.push_back("msii tile " + std::to_string(args.tile) + " of " +
+                                          std::to_string(args.tiles) + " x " + std::to_string(args.tiles) +
+                                          " (other vertices NaN; msii merge joins the tiles)");
+        return plyOptions;
+    };
+    // Tiled (without GigaMesh files, which need all columns at once): each tile's values go
+    // straight into the output file, so neither the results nor the file are held whole.
+    const bool streamed = tiled && !args.gigamesh;
+    std::unique_ptr<PlyPieceWriter> pieces;
+    double writeSeconds = 0;
     try {
         if (tiled) {
             TilingOptions tilingOptions;
             tilingOptions.memoryBudget = parseBytes(args.memoryBudget);
             tilingOptions.tilesPerAxis = args.tiles;
             tilingOptions.onlyTile = args.tile;
-            result = computeTiled(read.mesh, options, tilingOptions, &tiledInfo, &progress);
+            if (streamed) {
+                const auto sink = [&](const TileResult& part) {
+                    const Stopwatch write;
+                    const std::vector<VertexProperty> props =
+                        featureProperties(featuresOf(part.values.invariants, part.values.patchLine));
+                    std::vector<const float*> columns;
+                    for (const VertexProperty& p : props) columns.push_back(p.values.data());
+                    if (!pieces) {
+                        std::vector<std::string> names;
+                        for (const VertexProperty& p : props) names.push_back(p.name);
+                        pieces = std::make_unique<PlyPieceWriter>(output, read.mesh, names, plyOptionsFor(part.values));
+                    }
+                    pieces->write(part.vertices, columns);
+                    writeSeconds += write.seconds();
+                };
+                result = computeTiles(read.mesh, options, tilingOptions, sink, &tiledInfo, &progress);
+            } else {
+                result = computeTiled(read.mesh, options, tilingOptions, &tiledInfo, &progress);
+            }
         } else {
             result = computeInvariants(read.mesh, options, &progress);
         }
@@ -278,8 +320,6 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
 
     const auto& inv = result.invariants;
     const auto& pl = result.patchLine;
-    const Features features = featuresOf(inv, pl);
-    const std::vector<VertexProperty> props = featureProperties(features);
     const std::size_t n = inv.radii.size();
     std::string letters;
     for (const auto& [on, c] : {std::pair{sel.volume, 'V'}, std::pair{sel.sphere, 'S'},
@@ -287,19 +327,12 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
         if (on) letters += c;
 
     const Stopwatch write;
-    WritePlyOptions plyOptions;
-    std::ostringstream comment;
-    comment << "msii " << versionString() << " compute" << (args.exact ? " --exact" : "")
-            << " R=" << args.radius << " N=" << n << " voxel=" << result.voxelSize
-            << "; V_jj = V/|B_r|, S_jj = S/(4 pi r^2) (plane 0.5), P_jj = P/(pi r^2), L_jj = "
-               "L/(2 pi r) (plane 1), r_j = j*R/N; NaN = ball reaches the border"
-            << (args.exact ? " or vertex not computed" : "") << "; quality = "
-            << qualitySource(features);
-    plyOptions.comments.push_back(comment.str());
-    if (args.tile >= 0)  // read by msii merge
-        plyOptions.comments.push_back("msii tile " + std::to_string(args.tile) + " of " + std::to_string(args.tiles) +
-                                      " x " + std::to_string(args.tiles) + " (other vertices NaN; msii merge joins the tiles)");
-    writePly(output, read.mesh, props, plyOptions);
+    if (streamed) {
+        pieces->commit();
+    } else {
+        const std::vector<VertexProperty> props = featureProperties(featuresOf(inv, pl));
+        writePly(output, read.mesh, props, plyOptionsFor(result));
+    }
     if (args.gigamesh) {
         GigaMeshMatInfo info;
         info.inputFile = fs::absolute(input).string();
@@ -326,7 +359,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                                      ", largest radius first; quality = largest element");
         writeGigaMeshPly(gigameshFiles[k], read.mesh, plyRows, gmOptions);
     }
-    const double writeSeconds = write.seconds();
+    writeSeconds += write.seconds();
 
     nlohmann::json j;
     j["program"] = "msii";
@@ -357,7 +390,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                         {"P", "P/(pi r^2), flat plane 1"},
                         {"L", "L/(2 pi r), flat plane 1"},
                         {"order", "radius ascending: V_01 = r_1 = R/N ... V_NN = R"},
-                        {"quality", qualitySource(features) + " (the first of V, S, P, L computed, at the largest radius)"},
+                        {"quality", qualityName + " (the first of V, S, P, L computed, at the largest radius)"},
                         {"masked", args.exact ? "NaN where the ball reaches a mesh border, and at vertices not computed"
                                               : "NaN where the ball of that radius reaches a mesh border"}};
     const auto& st = result.stats;

@@ -106,6 +106,20 @@ void AtomicFile::write(const void* data, std::size_t bytes)
     }
 }
 
+void AtomicFile::writeAt(std::uint64_t offset, const void* data, std::size_t bytes)
+{
+    if (!mFile) throwWriteError(mTarget, "the file is already closed");
+    if (std::fflush(mFile) != 0) throwWriteError(mTarget, errnoText(errno != 0 ? errno : EIO));
+    const int fd = ::fileno(mFile);
+    const char* p = static_cast<const char*>(data);
+    while (bytes > 0) {
+        const ssize_t done = ::pwrite(fd, p, bytes, off_t(offset));
+        if (done < 0 && errno == EINTR) continue;
+        if (done <= 0) throwWriteError(mTarget, errnoText(done < 0 ? errno : EIO));
+        p += done, offset += std::uint64_t(done), bytes -= std::size_t(done);
+    }
+}
+
 void AtomicFile::commit()
 {
     if (mCommitted) return;

@@ -99,22 +99,17 @@ bool isPlyName(const std::string& name)
                         [](unsigned char c) { return c <= ' ' || c >= 127; });
 }
 
-void validate(const std::string& path, const TriMesh& mesh,
-              const std::vector<VertexProperty>& properties, const WritePlyOptions& options)
+/// The checks of every PLY written: vertex count, property names, the list, face indices.
+void validate(const std::string& path, const TriMesh& mesh, const std::vector<std::string>& names,
+              const WritePlyOptions& options)
 {
     const std::size_t n = mesh.numVertices();
     const std::string where = "; cannot write '" + path + "'.";
     if (n > std::size_t(std::numeric_limits<std::int32_t>::max()))
         throw InvalidInputError("the mesh has too many vertices for PLY int indices" + where);
-    for (const VertexProperty& property : properties) {
-        if (!isPlyName(property.name))
-            throw InvalidInputError("the vertex property name '" + property.name +
-                                    "' is empty or contains spaces" + where);
-        if (property.values.size() != n)
-            throw InvalidInputError("the vertex property '" + property.name + "' has " +
-                                    std::to_string(property.values.size()) + " values for " +
-                                    std::to_string(n) + " vertices" + where);
-    }
+    for (const std::string& name : names)
+        if (!isPlyName(name))
+            throw InvalidInputError("the vertex property name '" + name + "' is empty or contains spaces" + where);
     if (options.listLength < 0 || options.listLength > 255)
         throw InvalidInputError("the list property length " + std::to_string(options.listLength) +
                                 " is outside 0..255" + where);
@@ -136,12 +131,60 @@ void validate(const std::string& path, const TriMesh& mesh,
                                         std::to_string(n) + " vertices" + where);
 }
 
+std::string plyHeader(const TriMesh& mesh, const std::vector<std::string>& names,
+                      const WritePlyOptions& options, bool doublePoints)
+{
+    const char* pointType = doublePoints ? "double" : "float";
+    std::string header = "ply\nformat ";
+    header += options.binary ? "binary_little_endian 1.0\n" : "ascii 1.0\n";
+    for (const std::string& comment : options.comments) header += "comment " + oneLine(comment) + "\n";
+    header += "element vertex " + std::to_string(mesh.numVertices()) + "\n";
+    for (const char* axis : {"x", "y", "z"}) header += std::string("property ") + pointType + " " + axis + "\n";
+    for (const std::string& name : names) header += "property float " + name + "\n";
+    if (options.listLength > 0) header += "property list uchar float " + options.listName + "\n";
+    header += "element face " + std::to_string(mesh.numTriangles()) + "\n";
+    header += "property list uchar int vertex_indices\nend_header\n";
+    return header;
+}
+
+constexpr std::size_t kFaceBytes = 1 + 3 * sizeof(std::int32_t);
+
+void formatBinaryFaces(const TriMesh& mesh, std::size_t begin, std::size_t end, Buffer& buffer)
+{
+    buffer.resize((end - begin) * kFaceBytes);
+    char* out = buffer.data();
+    for (std::size_t f = begin; f < end; ++f) {
+        *out++ = 3;
+        for (std::uint32_t v : mesh.triangles[f]) out = put(out, std::int32_t(v));
+    }
+}
+
+char* putPoint(char* out, const Vec3& p, bool doublePoints)
+{
+    if (doublePoints) {
+        out = put(out, p.x);
+        out = put(out, p.y);
+        return put(out, p.z);
+    }
+    out = put(out, float(p.x));
+    out = put(out, float(p.y));
+    return put(out, float(p.z));
+}
+
 } // namespace
 
 void writePly(const std::string& path, const TriMesh& mesh,
               const std::vector<VertexProperty>& properties, const WritePlyOptions& options)
 {
-    validate(path, mesh, properties, options);
+    std::vector<std::string> names;
+    for (const VertexProperty& property : properties) {
+        names.push_back(property.name);
+        if (property.values.size() != mesh.numVertices())
+            throw InvalidInputError("the vertex property '" + property.name + "' has " +
+                                    std::to_string(property.values.size()) + " values for " +
+                                    std::to_string(mesh.numVertices()) + " vertices; cannot write '" + path + "'.");
+    }
+    validate(path, mesh, names, options);
     checkWritable(path);
 
     const std::size_t numVertices = mesh.numVertices();
@@ -149,17 +192,7 @@ void writePly(const std::string& path, const TriMesh& mesh,
     const bool hasList = options.listLength > 0;
     const std::size_t listLength = hasList ? std::size_t(options.listLength) : 0;
     const bool doublePoints = options.forceDoublePoints || needsDoublePoints(mesh.points);
-    const char* pointType = doublePoints ? "double" : "float";
-
-    std::string header = "ply\nformat ";
-    header += options.binary ? "binary_little_endian 1.0\n" : "ascii 1.0\n";
-    for (const std::string& comment : options.comments) header += "comment " + oneLine(comment) + "\n";
-    header += "element vertex " + std::to_string(numVertices) + "\n";
-    for (const char* axis : {"x", "y", "z"}) header += std::string("property ") + pointType + " " + axis + "\n";
-    for (const VertexProperty& property : properties) header += "property float " + property.name + "\n";
-    if (hasList) header += "property list uchar float " + options.listName + "\n";
-    header += "element face " + std::to_string(numFaces) + "\n";
-    header += "property list uchar int vertex_indices\nend_header\n";
+    const std::string header = plyHeader(mesh, names, options, doublePoints);
 
     AtomicFile file(path);
     file.write(header);
@@ -174,16 +207,7 @@ void writePly(const std::string& path, const TriMesh& mesh,
             buffer.resize((end - begin) * vertexBytes);
             char* out = buffer.data();
             for (std::size_t v = begin; v < end; ++v) {
-                const Vec3& p = points[v];
-                if (doublePoints) {
-                    out = put(out, p.x);
-                    out = put(out, p.y);
-                    out = put(out, p.z);
-                } else {
-                    out = put(out, float(p.x));
-                    out = put(out, float(p.y));
-                    out = put(out, float(p.z));
-                }
+                out = putPoint(out, points[v], doublePoints);
                 for (const VertexProperty& property : properties) out = put(out, property.values[v]);
                 if (hasList) {
                     *out++ = char(std::uint8_t(listLength));
@@ -192,14 +216,8 @@ void writePly(const std::string& path, const TriMesh& mesh,
                 }
             }
         });
-        constexpr std::size_t faceBytes = 1 + 3 * sizeof(std::int32_t);
         writeInChunks(file, numFaces, [&](std::size_t begin, std::size_t end, Buffer& buffer) {
-            buffer.resize((end - begin) * faceBytes);
-            char* out = buffer.data();
-            for (std::size_t f = begin; f < end; ++f) {
-                *out++ = 3;
-                for (std::uint32_t v : mesh.triangles[f]) out = put(out, std::int32_t(v));
-            }
+            formatBinaryFaces(mesh, begin, end, buffer);
         });
     } else {
         writeInChunks(file, numVertices, [&](std::size_t begin, std::size_t end, Buffer& buffer) {
@@ -235,6 +253,97 @@ void writePly(const std::string& path, const TriMesh& mesh,
         });
     }
     file.commit();
+}
+
+// ---------------------------------------------------------------------------------------
+// PlyPieceWriter
+
+struct PlyPieceWriter::State {
+    const TriMesh& mesh;
+    AtomicFile file;
+    std::size_t numProperties = 0, recordBytes = 0;
+    std::uint64_t vertexOffset = 0;  // where the first vertex record starts
+    bool doublePoints = false;
+    std::vector<bool> written;
+    State(const std::string& path, const TriMesh& m) : mesh(m), file(path) {}
+
+    /// Writes the records of vertices[first, last) (consecutive runs in one call each).
+    template <class Value>
+    void writeRecords(const std::vector<std::uint32_t>& vertices, const Value& value)
+    {
+        constexpr std::size_t kBufferBytes = std::size_t(8) << 20;
+        Buffer buffer;
+        std::size_t i = 0;
+        while (i < vertices.size()) {
+            // A run of consecutive vertices, at most a buffer long.
+            std::size_t end = i + 1;
+            while (end < vertices.size() && vertices[end] == vertices[end - 1] + 1 &&
+                   (end - i + 1) * recordBytes <= kBufferBytes)
+                ++end;
+            buffer.resize((end - i) * recordBytes);
+            char* out = buffer.data();
+            for (std::size_t k = i; k < end; ++k) {
+                out = putPoint(out, mesh.points[vertices[k]], doublePoints);
+                for (std::size_t c = 0; c < numProperties; ++c) out = put(out, value(c, k));
+            }
+            file.writeAt(vertexOffset + std::uint64_t(vertices[i]) * recordBytes, buffer.data(), buffer.size());
+            i = end;
+        }
+    }
+};
+
+PlyPieceWriter::PlyPieceWriter(const std::string& path, const TriMesh& mesh,
+                               const std::vector<std::string>& propertyNames, const WritePlyOptions& options)
+{
+    if (!options.binary || options.listLength > 0)
+        throw InvalidInputError("a PLY written in pieces is binary and has no list property; cannot write '" + path + "'.");
+    validate(path, mesh, propertyNames, options);
+    checkWritable(path);
+    mState = std::make_unique<State>(path, mesh);
+    State& s = *mState;
+    s.numProperties = propertyNames.size();
+    s.doublePoints = options.forceDoublePoints || needsDoublePoints(mesh.points);
+    s.recordBytes = (s.doublePoints ? 3 * sizeof(double) : 3 * sizeof(float)) + s.numProperties * sizeof(float);
+    const std::string header = plyHeader(mesh, propertyNames, options, s.doublePoints);
+    s.file.write(header);
+    s.vertexOffset = header.size();
+    s.written.assign(mesh.numVertices(), false);
+    // The faces now, after the room left for the vertex records.
+    std::uint64_t at = s.vertexOffset + std::uint64_t(mesh.numVertices()) * s.recordBytes;
+    constexpr std::size_t kFaces = std::size_t(1) << 18;
+    Buffer buffer;
+    for (std::size_t f = 0; f < mesh.numTriangles(); f += kFaces) {
+        formatBinaryFaces(mesh, f, std::min(mesh.numTriangles(), f + kFaces), buffer);
+        s.file.writeAt(at, buffer.data(), buffer.size());
+        at += buffer.size();
+    }
+}
+
+PlyPieceWriter::~PlyPieceWriter() = default;
+
+void PlyPieceWriter::write(const std::vector<std::uint32_t>& vertices, const std::vector<const float*>& columns)
+{
+    State& s = *mState;
+    if (columns.size() != s.numProperties)
+        throw InvalidInputError("PlyPieceWriter: " + std::to_string(columns.size()) + " columns for " +
+                                std::to_string(s.numProperties) + " properties.");
+    for (std::uint32_t v : vertices) {
+        if (v >= s.written.size())
+            throw InvalidInputError("PlyPieceWriter: vertex " + std::to_string(v) + " out of range.");
+        s.written[v] = true;
+    }
+    s.writeRecords(vertices, [&](std::size_t c, std::size_t k) { return columns[c][k]; });
+}
+
+void PlyPieceWriter::commit()
+{
+    State& s = *mState;
+    std::vector<std::uint32_t> missing;
+    for (std::size_t v = 0; v < s.written.size(); ++v)
+        if (!s.written[v]) missing.push_back(std::uint32_t(v));
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    s.writeRecords(missing, [&](std::size_t, std::size_t) { return nan; });
+    s.file.commit();
 }
 
 } // namespace msii

@@ -79,8 +79,12 @@ std::vector<int> tileOfVertices(const TriMesh& mesh, int tilesPerAxis)
     return tile;
 }
 
-ComputeResult computeTiled(TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
-                           TiledComputeInfo* info, Progress* progress)
+namespace {
+
+/// The tiled computation; with @p keepColumns the result columns for the whole mesh count
+/// against the memory budget (computeTiled), else not (computeTiles).
+ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling, bool keepColumns,
+                       const TileSink& sink, TiledComputeInfo* info, Progress* progress)
 {
     const Stopwatch total;
     if (options.exact) throw InvalidInputError("the exact mode is not tiled (restrict it with --vertices)");
@@ -95,11 +99,12 @@ ComputeResult computeTiled(TriMesh& mesh, const ComputeOptions& options, const T
     // Border distances are searched up to 2R; balls with their margin reach R + 4 h_L + 2 h_0.
     const double halo = std::max(2.0 * options.radius, options.radius + 4.0 * hCoarse + 2.0 * h0) + 2.0 * h0;
 
-    // Memory: the mesh and its result columns stay whole; each tile's computation comes on top.
+    // Memory: the mesh (points, triangles, tile of each vertex, local indices) stays whole,
+    // and with keepColumns its result columns; each tile's computation comes on top.
     const std::size_t nv = mesh.numVertices();
     const int invariants = int(options.computeVolume) + int(options.computeSphere) +
                            int(options.computePatch) + int(options.computeLine);
-    const double fixedBytes = double(nv) * (24.0 + 4.0 * invariants * options.scales) +
+    const double fixedBytes = double(nv) * (32.0 + (keepColumns ? 4.0 * invariants * options.scales : 0.0)) +
                               double(mesh.numTriangles()) * 12.0;
     const double perVertex = kBytesPerTileVertex * std::max(1.0, options.scales / 16.0);
     int n = tiling.tilesPerAxis;
@@ -108,8 +113,8 @@ ComputeResult computeTiled(TriMesh& mesh, const ComputeOptions& options, const T
     if (n == 0) {
         if (tiling.memoryBudget > 0 && tiling.memoryBudget <= fixedBytes)
             throw InvalidInputError("the memory budget of " + gigabytes(tiling.memoryBudget) +
-                                    " is too small for even one tile: the mesh and its results alone take " +
-                                    gigabytes(fixedBytes));
+                                    " is too small for even one tile: the mesh" +
+                                    (keepColumns ? " and its results" : "") + " alone take " + gigabytes(fixedBytes));
         const double allowed = tiling.memoryBudget > 0 ? (tiling.memoryBudget - fixedBytes) / perVertex
                                                        : std::numeric_limits<double>::max();
         const Vec3 ext = plan.stats.bboxMax - plan.stats.bboxMin;
@@ -131,18 +136,11 @@ ComputeResult computeTiled(TriMesh& mesh, const ComputeOptions& options, const T
         grid = makeGrid(plan.stats, n);
         sizes = grownTileSizes(mesh, grid, halo);
     }
+    if (tiling.onlyTile >= n * n)
+        throw InvalidInputError("tile " + std::to_string(tiling.onlyTile) + " does not exist (there are " +
+                                std::to_string(n * n) + " tiles, 0 to " + std::to_string(n * n - 1) + ")");
 
-    // Result columns for the whole mesh, NaN until a tile fills them.
     ComputeResult result = plan;
-    const float nan = std::numeric_limits<float>::quiet_NaN();
-    const auto columns = [&](bool wanted) {
-        return wanted ? std::vector<std::vector<float>>(radii.size(), std::vector<float>(nv, nan))
-                      : std::vector<std::vector<float>>();
-    };
-    result.invariants.volume = columns(options.computeVolume);
-    result.invariants.sphere = columns(options.computeSphere);
-    result.patchLine.patch = columns(options.computePatch);
-    result.patchLine.line = columns(options.computeLine);
     result.invariants.radii = result.patchLine.radii = radii;
     result.invariants.levelOfRadius = result.patchLine.levelOfRadius = levels;
     result.invariants.numLevels = *std::max_element(levels.begin(), levels.end()) + 1;
@@ -152,17 +150,20 @@ ComputeResult computeTiled(TriMesh& mesh, const ComputeOptions& options, const T
     ComputeOptions tileOptions = options;
     tileOptions.voxelSize = plan.voxelSize;  // the whole mesh's grid, so that tiles agree
     tileOptions.repair = false;              // already done on the whole mesh
-    std::size_t computed = 0;
-    if (tiling.onlyTile >= n * n)
-        throw InvalidInputError("tile " + std::to_string(tiling.onlyTile) + " does not exist (there are " +
-                                std::to_string(n * n) + " tiles, 0 to " + std::to_string(n * n - 1) + ")");
+    constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    std::size_t computed = 0, masked = 0;
+    std::vector<std::uint32_t> local;
     for (int t = 0; t < n * n; ++t) {
         if (tiling.onlyTile >= 0 && t != tiling.onlyTile) continue;
-        if (std::find(tileOf.begin(), tileOf.end(), t) == tileOf.end()) continue;
+        TileResult part;
+        part.tile = t;
+        for (std::size_t i = 0; i < nv; ++i)
+            if (tileOf[i] == t) part.vertices.push_back(std::uint32_t(i));
+        if (part.vertices.empty()) continue;
         // The tile's triangles: those with a vertex in the grown tile.
         TriMesh tile;
-        std::vector<std::uint32_t> local(nv, std::numeric_limits<std::uint32_t>::max());
-        std::vector<std::uint32_t> global;
+        local.assign(nv, kNone);
         for (const Triangle& tri : mesh.triangles) {
             if (!inGrownTile(grid, t, mesh.points[tri[0]], halo) && !inGrownTile(grid, t, mesh.points[tri[1]], halo) &&
                 !inGrownTile(grid, t, mesh.points[tri[2]], halo))
@@ -170,38 +171,45 @@ ComputeResult computeTiled(TriMesh& mesh, const ComputeOptions& options, const T
             Triangle lt;
             for (int k = 0; k < 3; ++k) {
                 std::uint32_t& l = local[tri[std::size_t(k)]];
-                if (l == std::numeric_limits<std::uint32_t>::max()) {
+                if (l == kNone) {
                     l = std::uint32_t(tile.points.size());
                     tile.points.push_back(mesh.points[tri[std::size_t(k)]]);
-                    global.push_back(tri[std::size_t(k)]);
                 }
                 lt[std::size_t(k)] = l;
             }
             tile.triangles.push_back(lt);
         }
-        const ComputeResult part = computeInvariants(tile, tileOptions, progress);
-        const auto scatter = [&](std::vector<std::vector<float>>& to, const std::vector<std::vector<float>>& from) {
-            for (std::size_t j = 0; j < to.size() && j < from.size(); ++j)
-                for (std::size_t l = 0; l < global.size(); ++l)
-                    if (tileOf[global[l]] == t) to[j][global[l]] = from[j][l];
+        ComputeResult values = computeInvariants(tile, tileOptions, progress);
+        tile = TriMesh();
+        // Keep the rows of the tile's own vertices, in their global order.
+        const auto own = [&](std::vector<std::vector<float>>& columns) {
+            for (std::vector<float>& column : columns) {
+                std::vector<float> kept(part.vertices.size());
+                for (std::size_t l = 0; l < kept.size(); ++l) {
+                    const std::uint32_t li = local[part.vertices[l]];
+                    kept[l] = li == kNone ? nan : column[li];
+                }
+                column.swap(kept);
+            }
         };
-        scatter(result.invariants.volume, part.invariants.volume);
-        scatter(result.invariants.sphere, part.invariants.sphere);
-        scatter(result.patchLine.patch, part.patchLine.patch);
-        scatter(result.patchLine.line, part.patchLine.line);
-        const ComputeTimings& pt = part.timings;
+        own(values.invariants.volume);
+        own(values.invariants.sphere);
+        own(values.patchLine.patch);
+        own(values.patchLine.line);
+        for (const auto* columns : {&values.invariants.volume, &values.invariants.sphere})
+            for (const auto& column : *columns)
+                for (float v : column) masked += std::isnan(v);
+        const ComputeTimings& pt = values.timings;
         ComputeTimings& rt = result.timings;
         rt.levelSet += pt.levelSet, rt.occupancy += pt.occupancy, rt.stencils += pt.stencils;
         rt.interpolation += pt.interpolation, rt.samples += pt.samples, rt.patchLine += pt.patchLine;
-        result.levelSetVoxels += part.levelSetVoxels;
-        result.levelSetBytes = std::max(result.levelSetBytes, part.levelSetBytes);
-        result.bandHalfWidth = part.bandHalfWidth;
+        result.levelSetVoxels += values.levelSetVoxels;
+        result.levelSetBytes = std::max(result.levelSetBytes, values.levelSetBytes);
+        result.bandHalfWidth = values.bandHalfWidth;
+        part.values = std::move(values);
+        sink(part);
         ++computed;
     }
-    std::size_t masked = 0;
-    for (const auto* cols : {&result.invariants.volume, &result.invariants.sphere})
-        for (const auto& c : *cols)
-            for (float v : c) masked += std::isnan(v);
     result.invariants.numMaskedValues = masked;
     if (info) {
         info->tilesPerAxis = n;
@@ -211,6 +219,44 @@ ComputeResult computeTiled(TriMesh& mesh, const ComputeOptions& options, const T
         info->estimatedPeakBytes = fixedBytes + perVertex * double(info->largestTileVertices);
     }
     result.timings.total = total.seconds();
+    return result;
+}
+
+} // namespace
+
+ComputeResult computeTiles(TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
+                           const TileSink& sink, TiledComputeInfo* info, Progress* progress)
+{
+    return runTiles(mesh, options, tiling, false, sink, info, progress);
+}
+
+ComputeResult computeTiled(TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
+                           TiledComputeInfo* info, Progress* progress)
+{
+    // Result columns for the whole mesh, NaN until a tile fills them.
+    const std::size_t nv = mesh.numVertices();
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    VolumeSphereResult vs;
+    PatchLineResult pl;
+    const auto scatter = [&](std::vector<std::vector<float>>& to, const std::vector<std::vector<float>>& from,
+                             const std::vector<std::uint32_t>& vertices) {
+        if (to.empty()) to.assign(from.size(), std::vector<float>(nv, nan));
+        for (std::size_t j = 0; j < from.size(); ++j)
+            for (std::size_t l = 0; l < vertices.size(); ++l) to[j][vertices[l]] = from[j][l];
+    };
+    ComputeResult result = runTiles(
+        mesh, options, tiling, true,
+        [&](const TileResult& part) {
+            scatter(vs.volume, part.values.invariants.volume, part.vertices);
+            scatter(vs.sphere, part.values.invariants.sphere, part.vertices);
+            scatter(pl.patch, part.values.patchLine.patch, part.vertices);
+            scatter(pl.line, part.values.patchLine.line, part.vertices);
+        },
+        info, progress);
+    result.invariants.volume = std::move(vs.volume);
+    result.invariants.sphere = std::move(vs.sphere);
+    result.patchLine.patch = std::move(pl.patch);
+    result.patchLine.line = std::move(pl.line);
     return result;
 }
 

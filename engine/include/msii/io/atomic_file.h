@@ -3,6 +3,7 @@
 /// @brief Output files appear whole or not at all: data goes to a temporary file in the
 /// target's folder, which is renamed over the target on commit() and removed otherwise.
 
+#include <cstdint>
 #include <cstdio>
 #include <string>
 
@@ -19,6 +20,10 @@ public:
 
     void write(const void* data, std::size_t bytes);  ///< @throw IOError (e.g. disk full)
     void write(const std::string& text) { write(text.data(), text.size()); }
+    /// Writes at byte @p offset of the file (anywhere, also beyond its current end, leaving
+    /// a hole), without moving the position of write(). For writers that fill a file in
+    /// pieces (io/write_ply.h's PlyPieceWriter). @throw IOError
+    void writeAt(std::uint64_t offset, const void* data, std::size_t bytes);
     /// Flushes, closes and renames onto the target. @throw IOError
     void commit();
     /// The temporary file, for writers that open it themselves (e.g. OpenEXR): write it

@@ -5,6 +5,8 @@
 
 #include <msii/mesh/trimesh.h>
 
+#include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -29,5 +31,31 @@ struct WritePlyOptions {
 ///        wrong number of values.
 void writePly(const std::string& path, const TriMesh& mesh,
               const std::vector<VertexProperty>& properties, const WritePlyOptions& options = {});
+
+/// A binary PLY written in pieces, for results larger than memory (the tiled compute): the
+/// header and the faces are written at once, the vertex records as their values arrive, in
+/// any order, straight to their place in the file. Vertices never given get NaN values. The
+/// file is byte for byte what writePly writes for the same mesh and values (binary, no list
+/// property) and appears only on commit(). Holds one bit per vertex, not the values.
+class PlyPieceWriter {
+public:
+    /// @throw IOError if the file cannot be created; InvalidInputError as writePly.
+    PlyPieceWriter(const std::string& path, const TriMesh& mesh, const std::vector<std::string>& propertyNames,
+                   const WritePlyOptions& options = {});
+    ~PlyPieceWriter();
+    PlyPieceWriter(const PlyPieceWriter&) = delete;
+    PlyPieceWriter& operator=(const PlyPieceWriter&) = delete;
+
+    /// Writes the records of @p vertices (each given once over all calls; ascending order
+    /// writes fastest): property k of vertices[i] is columns[k][i].
+    /// @throw InvalidInputError for a vertex out of range or a wrong number of columns.
+    void write(const std::vector<std::uint32_t>& vertices, const std::vector<const float*>& columns);
+    /// Fills the vertices not written with NaN, then renames onto the target. @throw IOError
+    void commit();
+
+private:
+    struct State;
+    std::unique_ptr<State> mState;
+};
 
 } // namespace msii

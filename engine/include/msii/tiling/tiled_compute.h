@@ -11,6 +11,9 @@
 #include <msii/invariants/compute.h>
 
 #include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
 
 namespace msii {
 
@@ -41,6 +44,25 @@ struct TiledComputeInfo {
     double haloWidth = 0;               ///< mesh units
     double estimatedPeakBytes = 0;
 };
+
+/// One tile's results, as handed to a TileSink when the tile is done.
+struct TileResult {
+    int tile = 0;
+    /// The tile's own vertices (global indices, ascending).
+    std::vector<std::uint32_t> vertices;
+    /// Their values: each column of values.invariants and values.patchLine has one entry per
+    /// vertices[i] (NaN for a vertex in no triangle); radii, levels, voxel size as the plan.
+    ComputeResult values;
+};
+using TileSink = std::function<void(const TileResult&)>;
+
+/// Computes @p options on @p mesh tile by tile (see the file comment) and hands each tile's
+/// results to @p sink instead of keeping them, so memory is bounded by one tile's
+/// computation next to the mesh (e.g. io/write_ply.h's PlyPieceWriter writes them straight
+/// to the output). Returns the plan, timings and counts, with empty feature columns.
+/// @throw as computeTiled, and whatever @p sink throws.
+ComputeResult computeTiles(TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
+                           const TileSink& sink, TiledComputeInfo* info = nullptr, Progress* progress = nullptr);
 
 /// Computes @p options on @p mesh tile by tile (see the file comment); the result has the
 /// same columns as computeInvariants (the exact mode is not tiled).
