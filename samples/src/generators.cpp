@@ -6,6 +6,7 @@
 #include <msii/samples/generators.h>
 
 #include <msii/core/errors.h>
+#include <msii/io/atomic_file.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -13,6 +14,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <cstdint>
 #include <iomanip>
 #include <limits>
@@ -176,6 +178,34 @@ double latticeCoord(int i, int n, double extent) { return i == n ? extent : exte
 /// out[2 q], out[2 q + 1] with q = j * nu + i; index(i, j) gives a grid vertex. Triangles
 /// are counter-clockwise in (i, j) (reversed if flip). Each quad takes its shorter diagonal
 /// (in 3D) with probability kShortDiagonalProbability, decided by hash(seed, stream, q).
+/// The two triangles of quad q with corners a, b, c, d (counter-clockwise in the lattice,
+/// reversed if flip): its shorter diagonal (in 3D) with probability
+/// kShortDiagonalProbability, decided by hash(seed, stream, q).
+void quadTriangles(std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d, const Vec3& pa,
+                   const Vec3& pb, const Vec3& pc, const Vec3& pd, std::uint64_t seed, std::uint64_t stream,
+                   std::uint64_t q, bool flip, Triangle* out)
+{
+    const bool acShorter = squaredNorm(pc - pa) <= squaredNorm(pd - pb);
+    const bool preferShort = unitInterval(hashKey(seed, stream, q)) < kShortDiagonalProbability;
+    Triangle t0, t1;
+    if (acShorter == preferShort) {
+        t0 = {a, b, c};
+        t1 = {a, c, d};
+    } else {
+        t0 = {a, b, d};
+        t1 = {b, c, d};
+    }
+    if (flip) {
+        std::swap(t0[1], t0[2]);
+        std::swap(t1[1], t1[2]);
+    }
+    out[0] = t0;
+    out[1] = t1;
+}
+
+/// Triangulates the quads of an (nu + 1) x (nv + 1) vertex grid, two triangles per quad at
+/// out[2 q], out[2 q + 1] with q = j * nu + i; index(i, j) gives a grid vertex (see
+/// quadTriangles).
 template <class IndexFn>
 void triangulateGrid(const std::vector<Vec3>& points, int nu, int nv, const IndexFn& index,
                      std::uint64_t seed, std::uint64_t stream, bool flip, Triangle* out)
@@ -186,22 +216,8 @@ void triangulateGrid(const std::vector<Vec3>& points, int nu, int nv, const Inde
                 const std::size_t q = std::size_t(j) * std::size_t(nu) + std::size_t(i);
                 const std::uint32_t a = index(i, j), b = index(i + 1, j), c = index(i + 1, j + 1),
                                     d = index(i, j + 1);
-                const bool acShorter = squaredNorm(points[c] - points[a]) <= squaredNorm(points[d] - points[b]);
-                const bool preferShort = unitInterval(hashKey(seed, stream, q)) < kShortDiagonalProbability;
-                Triangle t0, t1;
-                if (acShorter == preferShort) {
-                    t0 = {a, b, c};
-                    t1 = {a, c, d};
-                } else {
-                    t0 = {a, b, d};
-                    t1 = {b, c, d};
-                }
-                if (flip) {
-                    std::swap(t0[1], t0[2]);
-                    std::swap(t1[1], t1[2]);
-                }
-                out[2 * q] = t0;
-                out[2 * q + 1] = t1;
+                quadTriangles(a, b, c, d, points[a], points[b], points[c], points[d], seed, stream, q, flip,
+                              out + 2 * q);
             }
         }
     });
@@ -785,25 +801,25 @@ double heightFieldValue(const HeightFieldOptions& options, double x, double y)
     return z;
 }
 
-TriMesh makeHeightField(const HeightFieldOptions& options)
-{
-    const HeightFunction height(options);  // validates
-    const int nx = latticeCells(options.width, options.spacing);
-    const int ny = latticeCells(options.height, options.spacing);
-    const double stepX = options.width / nx, stepY = options.height / ny;
-    const double reach = kJitter * std::min(stepX, stepY);
-    const std::size_t rowLength = std::size_t(nx) + 1;
-    const std::size_t numTop = rowLength * (std::size_t(ny) + 1);
-    const int nz = options.closed ? latticeCells(options.thickness, options.spacing) : 0;
-    const std::size_t perimeter = 2 * (std::size_t(nx) + std::size_t(ny));
-    const std::size_t numBottomInterior = std::size_t(nx - 1) * std::size_t(ny - 1);
-    requireVertexCount(double(numTop) + (options.closed ? double(nz) * double(perimeter) + double(numBottomInterior) : 0.0));
+/// The jittered (nx + 1) x (ny + 1) lattice of a height field (vertex (i, j) has index
+/// j * (nx + 1) + i): interior vertices jittered in a disc, border ones along the border.
+struct HeightLattice {
+    int nx = 1, ny = 1;
+    double width = 1, height = 1, reach = 0;
+    std::uint64_t seed = 1;
+    std::size_t rowLength = 2;
 
-    const std::uint64_t seed = options.seed;
-    const double W = options.width, H = options.height;
-    // xy of lattice vertex (i, j): interior jittered in a disc, border along the border.
-    const auto latticeXY = [&](int i, int j, std::uint64_t stream) -> std::array<double, 2> {
-        double x = latticeCoord(i, nx, W), y = latticeCoord(j, ny, H);
+    explicit HeightLattice(const HeightFieldOptions& options)
+        : nx(latticeCells(options.width, options.spacing)), ny(latticeCells(options.height, options.spacing)),
+          width(options.width), height(options.height), seed(options.seed), rowLength(std::size_t(nx) + 1)
+    {
+        reach = kJitter * std::min(width / nx, height / ny);
+    }
+    std::size_t numPoints() const { return rowLength * (std::size_t(ny) + 1); }
+    std::uint32_t index(int i, int j) const { return std::uint32_t(std::size_t(j) * rowLength + std::size_t(i)); }
+    std::array<double, 2> xy(int i, int j, std::uint64_t stream) const
+    {
+        double x = latticeCoord(i, nx, width), y = latticeCoord(j, ny, height);
         const bool borderX = i == 0 || i == nx, borderY = j == 0 || j == ny;
         if (borderX && borderY) return {x, y};
         const std::uint64_t h = hashKey(seed, stream, std::uint64_t(j) * rowLength + std::uint64_t(i));
@@ -811,7 +827,23 @@ TriMesh makeHeightField(const HeightFieldOptions& options)
         if (borderY) return {x + reach * signedUnit(h), y};
         const auto d = unitDiscPoint(h);
         return {x + reach * d[0], y + reach * d[1]};
-    };
+    }
+};
+
+TriMesh makeHeightField(const HeightFieldOptions& options)
+{
+    const HeightFunction height(options);  // validates
+    const HeightLattice lattice(options);
+    const int nx = lattice.nx, ny = lattice.ny;
+    const std::size_t rowLength = lattice.rowLength;
+    const std::size_t numTop = lattice.numPoints();
+    const int nz = options.closed ? latticeCells(options.thickness, options.spacing) : 0;
+    const std::size_t perimeter = 2 * (std::size_t(nx) + std::size_t(ny));
+    const std::size_t numBottomInterior = std::size_t(nx - 1) * std::size_t(ny - 1);
+    requireVertexCount(double(numTop) + (options.closed ? double(nz) * double(perimeter) + double(numBottomInterior) : 0.0));
+
+    const std::uint64_t seed = options.seed;
+    const auto latticeXY = [&](int i, int j, std::uint64_t stream) { return lattice.xy(i, j, stream); };
 
     TriMesh mesh;
     mesh.points.resize(numTop);
@@ -895,6 +927,108 @@ TriMesh makeHeightField(const HeightFieldOptions& options)
     triangulateGrid(mesh.points, nx, ny, bottomIndex, seed, kStreamBottomDiagonal, true,
                     out + numTopTriangles + numWallTriangles);
     return mesh;
+}
+
+StreamedMeshCounts writeHeightFieldPly(const HeightFieldOptions& options, const std::string& path,
+                                       const WritePlyOptions& plyOptions)
+{
+    if (options.closed) throw InvalidInputError("sample mesh: only open height fields are streamed (no --closed).");
+    if (!plyOptions.binary || plyOptions.listLength > 0)
+        throw InvalidInputError("sample mesh: streamed files are binary PLY without list properties.");
+    static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "binary_little_endian by copying memory");
+    const HeightFunction height(options);  // validates
+    const HeightLattice lattice(options);
+    const int nx = lattice.nx, ny = lattice.ny;
+    const std::size_t numPoints = lattice.numPoints();
+    requireVertexCount(double(numPoints));
+    const std::size_t numTriangles = 2 * std::size_t(nx) * std::size_t(ny);
+    const bool doublePoints = plyOptions.forceDoublePoints;
+    // writePly stores float unless that moves a coordinate by more than 1e-7 of the bounding
+    // box diagonal, which is at least this (the corners (0, 0) and (w, h) are vertices).
+    const double floatTolerance = 1e-7 * std::sqrt(options.width * options.width + options.height * options.height);
+    const std::size_t pointBytes = doublePoints ? 3 * sizeof(double) : 3 * sizeof(float);
+    constexpr std::size_t faceBytes = 1 + 3 * sizeof(std::int32_t);
+
+    checkWritable(path);
+    AtomicFile file(path);
+    const std::string header = plyHeader(numPoints, numTriangles, {}, plyOptions, doublePoints);
+    file.write(header);
+    const std::uint64_t facesAt = header.size() + std::uint64_t(numPoints) * pointBytes;
+
+    // Bands of rows: the points of rows [j0, j1] (row j1 shared with the next band for its
+    // quads), then the vertex records of rows [j0, j1) and the triangles of quad rows
+    // [j0, j1), each band written in order (vertices sequentially, triangles at their place).
+    const int band = 64;
+    const std::size_t rowLength = lattice.rowLength;
+    std::vector<Vec3> points;
+    std::vector<char> vertexBytes, triangleBytes;
+    std::vector<Triangle> triangles;
+    for (int j0 = 0; j0 <= ny; j0 += band) {
+        const int j1 = std::min(ny, j0 + band);  // last row computed
+        const int rows = j1 - j0 + 1;
+        points.resize(std::size_t(rows) * rowLength);
+        tbb::parallel_for(tbb::blocked_range<int>(j0, j1 + 1), [&](const tbb::blocked_range<int>& r) {
+            for (int j = r.begin(); j != r.end(); ++j)
+                for (int i = 0; i <= nx; ++i) {
+                    const auto xy = lattice.xy(i, j, kStreamJitter);
+                    points[std::size_t(j - j0) * rowLength + std::size_t(i)] = {xy[0], xy[1], height(xy[0], xy[1])};
+                }
+        });
+        // Vertex records of rows [j0, j1), and of the last row with the last band.
+        const int lastVertexRow = j1 == ny ? j1 : j1 - 1;
+        const std::size_t count = std::size_t(lastVertexRow - j0 + 1) * rowLength;
+        vertexBytes.resize(count * pointBytes);
+        char* out = vertexBytes.data();
+        for (std::size_t k = 0; k < count; ++k) {
+            const Vec3& p = points[k];
+            for (int c = 0; c < 3; ++c) {
+                const double v = p[c];
+                if (doublePoints) {
+                    std::memcpy(out, &v, sizeof(double));
+                    out += sizeof(double);
+                } else {
+                    const float f = float(v);
+                    if (!(std::abs(double(f) - v) <= floatTolerance))
+                        throw InvalidInputError("sample mesh: coordinates need double precision (use --double).");
+                    std::memcpy(out, &f, sizeof(float));
+                    out += sizeof(float);
+                }
+            }
+        }
+        file.write(vertexBytes.data(), vertexBytes.size());
+        // Triangles of quad rows [j0, j1).
+        if (j1 > j0) {
+            triangles.resize(2 * std::size_t(j1 - j0) * std::size_t(nx));
+            tbb::parallel_for(tbb::blocked_range<int>(j0, j1), [&](const tbb::blocked_range<int>& r) {
+                for (int j = r.begin(); j != r.end(); ++j)
+                    for (int i = 0; i < nx; ++i) {
+                        const std::size_t q = std::size_t(j) * std::size_t(nx) + std::size_t(i);
+                        const auto at = [&](int di, int dj) -> const Vec3& {
+                            return points[std::size_t(j + dj - j0) * rowLength + std::size_t(i + di)];
+                        };
+                        quadTriangles(lattice.index(i, j), lattice.index(i + 1, j), lattice.index(i + 1, j + 1),
+                                      lattice.index(i, j + 1), at(0, 0), at(1, 0), at(1, 1), at(0, 1), options.seed,
+                                      kStreamDiagonal, q, false,
+                                      triangles.data() + 2 * (std::size_t(j - j0) * std::size_t(nx) + std::size_t(i)));
+                    }
+            });
+            triangleBytes.resize(triangles.size() * faceBytes);
+            char* t = triangleBytes.data();
+            for (const Triangle& tri : triangles) {
+                *t++ = 3;
+                for (std::uint32_t v : tri) {
+                    const std::int32_t index = std::int32_t(v);
+                    std::memcpy(t, &index, sizeof(index));
+                    t += sizeof(index);
+                }
+            }
+            const std::uint64_t firstTriangle = 2 * std::uint64_t(j0) * std::uint64_t(nx);
+            file.writeAt(facesAt + firstTriangle * faceBytes, triangleBytes.data(), triangleBytes.size());
+        }
+        if (j1 == ny) break;
+    }
+    file.commit();
+    return {numPoints, numTriangles};
 }
 
 } // namespace msii::samples

@@ -5,6 +5,10 @@
 ///   msii-samples SHAPE --output FILE.ply [--spacing S] [--seed N] [shape options]
 ///   msii-samples --list
 ///
+/// Open height fields (plane, terrain, tablet without --closed) in binary are streamed to
+/// the file a band of rows at a time, so their size is limited by the disk, not by memory
+/// (e.g. a 50M-vertex terrain for the benchmark).
+///
 /// Exit codes: 0 success; 2 bad command line or invalid option values (one line
 /// "msii-samples: error: ..." on stderr); 1 any other failure (e.g. the file cannot be
 /// written).
@@ -188,6 +192,20 @@ int main(int argc, char** argv)
             o.seed = seed;
             comment << " width " << o.width << " height " << o.height << " spacing " << o.spacing;
             if (o.closed) comment << " closed thickness " << o.thickness;
+            if (!o.closed && !ascii) {
+                // Streamed: never held in memory, so any size the disk takes.
+                msii::WritePlyOptions plyOptions;
+                plyOptions.forceDoublePoints = doublePoints;
+                plyOptions.comments.push_back(comment.str());
+                msii::samples::StreamedMeshCounts counts;
+                try {
+                    counts = msii::samples::writeHeightFieldPly(o, output, plyOptions);
+                } catch (const msii::IOError& e) {
+                    return fail(1, e.what());
+                }
+                if (!quiet) std::cout << output << ": " << counts.vertices << " vertices, " << counts.triangles << " triangles\n";
+                return 0;
+            }
             mesh = msii::samples::makeHeightField(o);
         }
 

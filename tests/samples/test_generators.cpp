@@ -685,3 +685,57 @@ TEST(SampleCli, BadOptionsExitTwoWithOneLine)
     expectUsageError("sphere --seed -3" + out, "--seed");
     EXPECT_FALSE(std::ifstream(::testing::TempDir() + "never_written.ply").good());
 }
+
+// The streamed writer (issue 6: a 50M-vertex terrain without holding it) writes byte for
+// byte what writePly writes for makeHeightField, for every kind, band boundaries included
+// (130 rows = two full bands of 64 and a short one), float and double points; and the
+// msii-samples program streams open height fields.
+TEST(SampleHeightField, StreamedFileEqualsTheMeshWritten)
+{
+    const std::string dir = ::testing::TempDir();
+    for (HeightFieldKind kind : {HeightFieldKind::Plane, HeightFieldKind::Terrain, HeightFieldKind::Tablet}) {
+        HeightFieldOptions o;
+        o.kind = kind;
+        o.width = 9.7;
+        o.height = 13.0;
+        o.spacing = 0.1;  // 97 x 130 cells
+        o.seed = 5;
+        for (bool doublePoints : {false, true}) {
+            SCOPED_TRACE(std::to_string(int(kind)) + (doublePoints ? " double" : " float"));
+            WritePlyOptions po;
+            po.forceDoublePoints = doublePoints;
+            po.comments = {"msii-samples test"};
+            const TriMesh mesh = makeHeightField(o);
+            writePly(dir + "held.ply", mesh, {}, po);
+            const StreamedMeshCounts counts = writeHeightFieldPly(o, dir + "streamed.ply", po);
+            EXPECT_EQ(counts.vertices, mesh.numVertices());
+            EXPECT_EQ(counts.triangles, mesh.numTriangles());
+            const std::string held = readFile(dir + "held.ply");
+            EXPECT_GT(held.size(), 100000u);
+            EXPECT_TRUE(readFile(dir + "streamed.ply") == held);
+        }
+    }
+    HeightFieldOptions closed;
+    closed.closed = true;
+    EXPECT_THROW(writeHeightFieldPly(closed, dir + "closed.ply", {}), InvalidInputError);
+    EXPECT_FALSE(std::ifstream(dir + "closed.ply").good());
+}
+
+TEST(SampleCli, OpenHeightFieldsAreStreamedToTheSameFile)
+{
+    if (!samplesExecutableExists()) GTEST_SKIP() << "msii-samples not built";
+    const std::string file = ::testing::TempDir() + "cli_terrain.ply";
+    const RunResult r = runSamples("terrain --width 6 --height 4 --spacing 0.05 --seed 9 -q --output '" + file + "'");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    HeightFieldOptions o;
+    o.kind = HeightFieldKind::Terrain;
+    o.width = 6;
+    o.height = 4;
+    o.spacing = 0.05;
+    o.seed = 9;
+    const std::string held = ::testing::TempDir() + "cli_terrain_held.ply";
+    WritePlyOptions po;
+    po.comments = {"msii-samples terrain seed 9 width 6 height 4 spacing 0.05"};
+    writePly(held, makeHeightField(o), {}, po);
+    EXPECT_TRUE(readFile(file) == readFile(held));
+}

@@ -131,22 +131,6 @@ void validate(const std::string& path, const TriMesh& mesh, const std::vector<st
                                         std::to_string(n) + " vertices" + where);
 }
 
-std::string plyHeader(const TriMesh& mesh, const std::vector<std::string>& names,
-                      const WritePlyOptions& options, bool doublePoints)
-{
-    const char* pointType = doublePoints ? "double" : "float";
-    std::string header = "ply\nformat ";
-    header += options.binary ? "binary_little_endian 1.0\n" : "ascii 1.0\n";
-    for (const std::string& comment : options.comments) header += "comment " + oneLine(comment) + "\n";
-    header += "element vertex " + std::to_string(mesh.numVertices()) + "\n";
-    for (const char* axis : {"x", "y", "z"}) header += std::string("property ") + pointType + " " + axis + "\n";
-    for (const std::string& name : names) header += "property float " + name + "\n";
-    if (options.listLength > 0) header += "property list uchar float " + options.listName + "\n";
-    header += "element face " + std::to_string(mesh.numTriangles()) + "\n";
-    header += "property list uchar int vertex_indices\nend_header\n";
-    return header;
-}
-
 constexpr std::size_t kFaceBytes = 1 + 3 * sizeof(std::int32_t);
 
 void formatBinaryFaces(const TriMesh& mesh, std::size_t begin, std::size_t end, Buffer& buffer)
@@ -192,7 +176,7 @@ void writePly(const std::string& path, const TriMesh& mesh,
     const bool hasList = options.listLength > 0;
     const std::size_t listLength = hasList ? std::size_t(options.listLength) : 0;
     const bool doublePoints = options.forceDoublePoints || needsDoublePoints(mesh.points);
-    const std::string header = plyHeader(mesh, names, options, doublePoints);
+    const std::string header = plyHeader(mesh.numVertices(), mesh.numTriangles(), names, options, doublePoints);
 
     AtomicFile file(path);
     file.write(header);
@@ -255,6 +239,22 @@ void writePly(const std::string& path, const TriMesh& mesh,
     file.commit();
 }
 
+std::string plyHeader(std::size_t numVertices, std::size_t numFaces, const std::vector<std::string>& propertyNames,
+                      const WritePlyOptions& options, bool doublePoints)
+{
+    const char* pointType = doublePoints ? "double" : "float";
+    std::string header = "ply\nformat ";
+    header += options.binary ? "binary_little_endian 1.0\n" : "ascii 1.0\n";
+    for (const std::string& comment : options.comments) header += "comment " + oneLine(comment) + "\n";
+    header += "element vertex " + std::to_string(numVertices) + "\n";
+    for (const char* axis : {"x", "y", "z"}) header += std::string("property ") + pointType + " " + axis + "\n";
+    for (const std::string& name : propertyNames) header += "property float " + name + "\n";
+    if (options.listLength > 0) header += "property list uchar float " + options.listName + "\n";
+    header += "element face " + std::to_string(numFaces) + "\n";
+    header += "property list uchar int vertex_indices\nend_header\n";
+    return header;
+}
+
 // ---------------------------------------------------------------------------------------
 // PlyPieceWriter
 
@@ -304,7 +304,7 @@ PlyPieceWriter::PlyPieceWriter(const std::string& path, const TriMesh& mesh,
     s.numProperties = propertyNames.size();
     s.doublePoints = options.forceDoublePoints || needsDoublePoints(mesh.points);
     s.recordBytes = (s.doublePoints ? 3 * sizeof(double) : 3 * sizeof(float)) + s.numProperties * sizeof(float);
-    const std::string header = plyHeader(mesh, propertyNames, options, s.doublePoints);
+    const std::string header = plyHeader(mesh.numVertices(), mesh.numTriangles(), propertyNames, options, s.doublePoints);
     s.file.write(header);
     s.vertexOffset = header.size();
     s.written.assign(mesh.numVertices(), false);

@@ -32,6 +32,12 @@ struct WritePlyOptions {
 void writePly(const std::string& path, const TriMesh& mesh,
               const std::vector<VertexProperty>& properties, const WritePlyOptions& options = {});
 
+/// The header writePly writes for a mesh of @p numVertices and @p numFaces with float
+/// properties @p propertyNames (and options' list), x, y, z as double if @p doublePoints;
+/// for writers that stream a mesh they never hold (e.g. generated samples).
+std::string plyHeader(std::size_t numVertices, std::size_t numFaces, const std::vector<std::string>& propertyNames,
+                      const WritePlyOptions& options, bool doublePoints);
+
 /// A binary PLY written in pieces, for results larger than memory (the tiled compute): the
 /// header and the faces are written at once, the vertex records as their values arrive, in
 /// any order, straight to their place in the file. Vertices never given get NaN values. The

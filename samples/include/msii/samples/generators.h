@@ -35,9 +35,11 @@
 /// no exp/sin/...), so builds without floating-point contraction (no FMA fusing) give
 /// bit-identical meshes.
 
+#include <msii/io/write_ply.h>
 #include <msii/mesh/trimesh.h>
 
 #include <cstdint>
+#include <string>
 
 namespace msii::samples {
 
@@ -101,6 +103,20 @@ struct HeightFieldOptions {
 ///        thickness does not reach below the lowest top point, or the mesh would exceed
 ///        200 million vertices.
 TriMesh makeHeightField(const HeightFieldOptions& options);
+
+/// Writes the open height field of @p options to a binary PLY, byte for byte what writePly
+/// writes for makeHeightField(options), without ever holding the mesh: the lattice is
+/// generated and written a band of rows at a time (memory ~ a few MB whatever the size),
+/// for meshes larger than memory, e.g. a 50M-vertex terrain. Points are float unless
+/// @p plyOptions forces double. Returns the vertex and triangle counts.
+/// @throw InvalidInputError as makeHeightField, for a closed slab or an ascii file, and if
+///        float points would lose more than 1e-7 of the size (force double then);
+///        IOError if the file cannot be written (nothing is left behind).
+struct StreamedMeshCounts {
+    std::size_t vertices = 0, triangles = 0;
+};
+StreamedMeshCounts writeHeightFieldPly(const HeightFieldOptions& options, const std::string& path,
+                                       const WritePlyOptions& plyOptions);
 
 /// The analytic height of the surface makeHeightField samples (without the lattice jitter),
 /// for tests that need the true surface. makeHeightField sets z = heightFieldValue(x, y)
