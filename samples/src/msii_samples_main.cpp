@@ -78,7 +78,9 @@ int fail(int code, const std::string& message)
 int main(int argc, char** argv)
 {
     CLI::App app{"Writes deterministic, seedable sample meshes (irregular, scanner-like triangulations) "
-                 "as PLY. Units are mm. The same options give the same mesh on every machine."};
+                 "as PLY. Units are mm. The same options give the same mesh on every machine. Open height "
+                 "fields (plane, terrain, tablet) in binary are streamed to the file, so their size is "
+                 "limited by the disk, not by memory."};
     app.set_help_flag("-h,--help", "Print this help message and exit");
 
     std::string shape, output, centerText;

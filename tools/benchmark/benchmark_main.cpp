@@ -96,7 +96,7 @@ int main(int argc, char** argv)
     app.add_option("--invariants", invariants, "which invariants, e.g. V,S (default V,S,P,L)");
     int mapPixels = 4096, picturePixels = 2048, tiles = 2;
     app.add_option("--tiles", tiles, "also time the compute in K x K tiles (default 2; 0: skip)");
-    app.add_option("--map-pixels", mapPixels, "longer side of the EXR map, pixels (default 4096)");
+    app.add_option("--map-pixels", mapPixels, "longer side of the EXR map, pixels (default 4096; 0: skip maps and pictures)");
     app.add_option("--picture-pixels", picturePixels, "longer side of the PNG picture, pixels (default 2048)");
     double largeVertices = 0;
     std::string largeBudget = "8G", msiiProgram = MSII_PROGRAM, samplesProgram = MSII_SAMPLES_PROGRAM;
@@ -116,6 +116,49 @@ int main(int argc, char** argv)
     const fs::path dir = fs::temp_directory_path() / ("msii-benchmark-" + std::to_string(getpid()));
     fs::create_directories(dir);
     const std::string input = (dir / "tablet.ply").string(), output = (dir / "tablet.msii.ply").string();
+    const auto number = [](double v) {
+        char text[32];
+        std::snprintf(text, sizeof(text), "%.6g", v);
+        return std::string(text);
+    };
+    struct LargeRun {
+        ChildRun generate, compute;
+        double side = 0, inputBytes = 0, outputBytes = 0;
+        nlohmann::json json;
+        bool ok = false;
+    } large;
+    if (largeVertices > 0) {
+        // Issue 6: a terrain far larger than the tablet, generated streamed to disk and computed
+        // by msii compute in tiles sized from the memory budget; one run (it takes long). Run
+        // first, while this process is small: a spawned child starts out sharing this process's
+        // memory, which would count in its peak.
+        const double side = std::sqrt(largeVertices) * spacing;
+        fs::create_directories(dir);
+        const std::string terrain = (dir / "terrain.ply").string(), terrainOut = (dir / "terrain.msii.ply").string();
+        large.side = side;
+        large.generate = runChild({samplesProgram, "terrain", "--width", number(side), "--height", number(side),
+                                       "--spacing", number(spacing), "-q", "--output", terrain});
+        if (!large.generate.ok) {
+            std::fprintf(stderr, "msii-benchmark: error: %s could not write the terrain\n", samplesProgram.c_str());
+            fs::remove_all(dir);
+            return 1;
+        }
+        large.inputBytes = double(fs::file_size(terrain));
+        large.compute = runChild({msiiProgram, "compute", terrain, "-r", number(radius), "-n", std::to_string(scales),
+                                       "--precision", number(precision), "--invariants", invariants, "--memory-budget",
+                                       largeBudget, "-q", "--output", terrainOut});
+        if (!large.compute.ok) {
+            std::fprintf(stderr, "msii-benchmark: error: msii compute failed on the terrain\n");
+            fs::remove_all(dir);
+            return 1;
+        }
+        large.outputBytes = double(fs::file_size(terrainOut));
+        std::ifstream sidecar((dir / "terrain.msii.json").string());
+        large.json = nlohmann::json::parse(sidecar);
+        large.ok = true;
+        fs::remove_all(dir);
+        fs::create_directories(dir);
+    }
     const Stopwatch generating;
     {
         const TriMesh mesh = samples::makeHeightField(ho);
@@ -327,55 +370,26 @@ int main(int argc, char** argv)
             median(pictureSeconds), "%8.2f");
     row("peak memory (MB)", usage.ru_maxrss / 1024.0, "%8.0f");
     std::fflush(stdout);
-    if (largeVertices <= 0) return 0;
 
-    // Issue 6: a terrain far larger than the tablet, generated streamed to disk and computed
-    // by msii compute in tiles sized from the memory budget; one run (it takes long).
-    const double side = std::sqrt(largeVertices) * spacing;
-    fs::create_directories(dir);
-    const std::string terrain = (dir / "terrain.ply").string(), terrainOut = (dir / "terrain.msii.ply").string();
-    const auto number = [](double v) {
-        char text[32];
-        std::snprintf(text, sizeof(text), "%.6g", v);
-        return std::string(text);
-    };
-    const ChildRun generated = runChild({samplesProgram, "terrain", "--width", number(side), "--height", number(side),
-                                   "--spacing", number(spacing), "-q", "--output", terrain});
-    if (!generated.ok) {
-        std::fprintf(stderr, "msii-benchmark: error: %s could not write the terrain\n", samplesProgram.c_str());
-        fs::remove_all(dir);
-        return 1;
-    }
-    const double inputBytes = double(fs::file_size(terrain));
-    const ChildRun run = runChild({msiiProgram, "compute", terrain, "-r", number(radius), "-n", std::to_string(scales),
-                                   "--precision", number(precision), "--invariants", invariants, "--memory-budget",
-                                   largeBudget, "-q", "--output", terrainOut});
-    if (!run.ok) {
-        std::fprintf(stderr, "msii-benchmark: error: msii compute failed on the terrain\n");
-        fs::remove_all(dir);
-        return 1;
-    }
-    const double outputBytes = double(fs::file_size(terrainOut));
-    std::ifstream sidecar((dir / "terrain.msii.json").string());
-    const nlohmann::json j = nlohmann::json::parse(sidecar);
-    fs::remove_all(dir);
+    if (!large.ok) return 0;
+    const nlohmann::json& j = large.json;
     const double largeNv = j["mesh"]["vertices"].get<double>();
     const int perAxis = j["tiling"]["tiles_per_axis"].get<int>();
-    const double perVertex = run.seconds / largeNv, smallPerVertex = median(total) / double(nv);
+    const double perVertex = large.compute.seconds / largeNv, smallPerVertex = median(total) / double(nv);
     std::printf("\nstreamed terrain %s x %s mm, spacing %.3f mm, %.0f vertices, %.0f triangles; "
                 "msii compute -r %g -n %d --invariants %s --memory-budget %s: %d x %d tiles (largest %.0f "
                 "vertices with halo, halo %.2f mm); one run each, separate processes\n\n",
-                number(side).c_str(), number(side).c_str(), spacing, largeNv, j["mesh"]["faces"].get<double>(),
+                number(large.side).c_str(), number(large.side).c_str(), spacing, largeNv, j["mesh"]["faces"].get<double>(),
                 radius, scales, invariants.c_str(), largeBudget.c_str(), perAxis, perAxis,
                 j["tiling"]["largest_tile_vertices"].get<double>(), j["tiling"]["halo"].get<double>());
     std::printf("| %-62s | %8s | %8s |\n|%s|%s|%s|\n", "stage", "seconds", "peak MB", std::string(64, '-').c_str(),
                 std::string(10, '-').c_str(), std::string(10, '-').c_str());
     std::printf("| %-62s | %8.1f | %8.0f |\n",
-                ("msii-samples terrain, streamed (" + std::to_string(int(inputBytes / 1e6)) + " MB)").c_str(),
-                generated.seconds, generated.peakBytes / 1e6);
+                ("msii-samples terrain, streamed (" + std::to_string(int(large.inputBytes / 1e6)) + " MB)").c_str(),
+                large.generate.seconds, large.generate.peakBytes / 1e6);
     std::printf("| %-62s | %8.1f | %8.0f |\n",
-                ("**msii compute, read to write** (" + std::to_string(int(outputBytes / 1e6)) + " MB)").c_str(),
-                run.seconds, run.peakBytes / 1e6);
+                ("**msii compute, read to write** (" + std::to_string(int(large.outputBytes / 1e6)) + " MB)").c_str(),
+                large.compute.seconds, large.compute.peakBytes / 1e6);
     const auto& t = j["timings_seconds"];
     for (const char* stage : {"read", "check", "level_set", "stencils", "samples", "patch_line", "write"})
         std::printf("| %-62s | %8.1f | %8s |\n", ("  of which " + std::string(stage)).c_str(), t[stage].get<double>(), "");

@@ -18,7 +18,7 @@ bool Progress::stderrIsTerminal() { return ::isatty(STDERR_FILENO) == 1; }
 void Progress::start(const std::string& stage, std::size_t total)
 {
     std::lock_guard<std::mutex> lock(mMutex);
-    mStage = stage;
+    mStage = mPrefix + stage;
     mTotal = total;
     mDone = 0;
     mStart = mLastDraw = std::chrono::steady_clock::now();
@@ -46,6 +46,12 @@ void Progress::end()
     if (!mActive) return;
     mActive = false;
     if (mEnabled) draw(true);
+}
+
+void Progress::setPrefix(const std::string& prefix)
+{
+    std::lock_guard<std::mutex> lock(mMutex);
+    mPrefix = prefix;
 }
 
 void Progress::draw(bool final)

@@ -146,7 +146,9 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
     result.invariants.numLevels = *std::max_element(levels.begin(), levels.end()) + 1;
 
     std::vector<int> tileOf(nv);
-    for (std::size_t i = 0; i < nv; ++i) tileOf[i] = grid.tileOf(mesh.points[i]);
+    std::vector<bool> tileHasVertices(std::size_t(n) * std::size_t(n), false);
+    for (std::size_t i = 0; i < nv; ++i) tileHasVertices[std::size_t(tileOf[i] = grid.tileOf(mesh.points[i]))] = true;
+    const std::size_t tilesWithVertices = std::size_t(std::count(tileHasVertices.begin(), tileHasVertices.end(), true));
     ComputeOptions tileOptions = options;
     tileOptions.voxelSize = plan.voxelSize;  // the whole mesh's grid, so that tiles agree
     tileOptions.repair = false;              // already done on the whole mesh
@@ -158,9 +160,9 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
         if (tiling.onlyTile >= 0 && t != tiling.onlyTile) continue;
         TileResult part;
         part.tile = t;
+        if (!tileHasVertices[std::size_t(t)]) continue;
         for (std::size_t i = 0; i < nv; ++i)
             if (tileOf[i] == t) part.vertices.push_back(std::uint32_t(i));
-        if (part.vertices.empty()) continue;
         // The tile's triangles: those with a vertex in the grown tile.
         TriMesh tile;
         local.assign(nv, kNone);
@@ -179,7 +181,12 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
             }
             tile.triangles.push_back(lt);
         }
+        if (progress) {
+            const std::size_t tiles = tiling.onlyTile >= 0 ? 1 : tilesWithVertices;
+            progress->setPrefix("tile " + std::to_string(computed + 1) + " of " + std::to_string(tiles) + ": ");
+        }
         ComputeResult values = computeInvariants(tile, tileOptions, progress);
+        if (progress) progress->setPrefix("");
         tile = TriMesh();
         // Keep the rows of the tile's own vertices, in their global order.
         const auto own = [&](std::vector<std::vector<float>>& columns) {

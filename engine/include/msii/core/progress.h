@@ -23,6 +23,8 @@ public:
     /// Add @p done units of work (thread-safe); redraws at most ~10 times per second.
     void advance(std::size_t done = 1);
     void end();
+    /// Text shown before every stage from now on, e.g. "tile 3 of 25: " (empty: none).
+    void setPrefix(const std::string& prefix);
 
     bool enabled() const { return mEnabled; }
     static bool stderrIsTerminal();
@@ -31,7 +33,7 @@ private:
     void draw(bool final);
 
     bool mEnabled;
-    std::string mStage;
+    std::string mStage, mPrefix;
     std::size_t mTotal = 0;
     std::atomic<std::size_t> mDone{0};
     std::mutex mMutex;
