@@ -38,13 +38,78 @@ TileGrid makeGrid(const MeshStats& stats, int n)
     return g;
 }
 
-/// Whether p lies in tile t grown by the halo.
-bool inGrownTile(const TileGrid& g, int t, const Vec3& p, double halo)
+/// Whether coordinate v lies in cell i (of size @p size from @p lo) grown by the halo.
+bool inGrownCell(double v, double lo, double size, int i, double halo)
 {
-    const int ia = t / g.n, ib = t % g.n;
-    const double a = p[g.axisA], b = p[g.axisB];
-    return a >= g.minA + ia * g.sizeA - halo && a <= g.minA + (ia + 1) * g.sizeA + halo &&
-           b >= g.minB + ib * g.sizeB - halo && b <= g.minB + (ib + 1) * g.sizeB + halo;
+    return v >= lo + i * size - halo && v <= lo + (i + 1) * size + halo;
+}
+
+/// The grown tiles containing p, as a box of tile rows [r[0], r[1]] (along a) and columns
+/// [r[2], r[3]] (along b), decided by inGrownCell axis by axis.
+std::array<int, 4> grownTilesOf(const TileGrid& g, const Vec3& p, double halo)
+{
+    std::array<int, 4> r{};
+    const auto range = [&](double v, double lo, double size, int& first, int& last) {
+        // Candidates: the cells of v -+ halo, one more each side against rounding.
+        const int c0 = std::max(0, g.cell(v - halo, lo, size) - 1);
+        const int c1 = std::min(g.n - 1, g.cell(v + halo, lo, size) + 1);
+        first = g.n, last = -1;
+        for (int i = c0; i <= c1; ++i)
+            if (inGrownCell(v, lo, size, i, halo)) first = std::min(first, i), last = i;
+    };
+    range(p[g.axisA], g.minA, g.sizeA, r[0], r[1]);
+    range(p[g.axisB], g.minB, g.sizeB, r[2], r[3]);
+    return r;
+}
+
+/// Items of each tile as lists: tile t's are ids[offsets[t] ... offsets[t + 1]), ascending.
+struct Buckets {
+    std::vector<std::size_t> offsets;
+    std::vector<std::uint32_t> ids;
+    const std::uint32_t* begin(int t) const { return ids.data() + offsets[std::size_t(t)]; }
+    const std::uint32_t* end(int t) const { return ids.data() + offsets[std::size_t(t) + 1]; }
+};
+
+/// Counting sort of items 0 … count − 1 into tiles: forTiles(i, add) calls add(t) for each
+/// tile t of item i (at most once per tile).
+template <class ForTiles>
+Buckets bucketize(std::size_t numTiles, std::size_t count, const ForTiles& forTiles)
+{
+    Buckets b;
+    b.offsets.assign(numTiles + 1, 0);
+    for (std::size_t i = 0; i < count; ++i) forTiles(i, [&](int t) { ++b.offsets[std::size_t(t) + 1]; });
+    for (std::size_t t = 0; t < numTiles; ++t) b.offsets[t + 1] += b.offsets[t];
+    b.ids.resize(b.offsets.back());
+    std::vector<std::size_t> fill(b.offsets.begin(), b.offsets.end() - 1);
+    for (std::size_t i = 0; i < count; ++i)
+        forTiles(i, [&](int t) { b.ids[fill[std::size_t(t)]++] = std::uint32_t(i); });
+    return b;
+}
+
+/// The triangles of each grown tile (those with a vertex inside it), in mesh order, in one
+/// pass over the mesh; with only >= 0, only that tile's.
+Buckets trianglesOfGrownTiles(const TriMesh& mesh, const TileGrid& g, double halo, int only)
+{
+    return bucketize(std::size_t(g.n) * std::size_t(g.n), mesh.numTriangles(), [&](std::size_t f, const auto& add) {
+        const Triangle& tri = mesh.triangles[f];
+        std::array<std::array<int, 4>, 3> boxes;
+        std::array<int, 4> all{g.n, -1, g.n, -1};
+        for (std::size_t k = 0; k < 3; ++k) {
+            boxes[k] = grownTilesOf(g, mesh.points[tri[k]], halo);
+            all = {std::min(all[0], boxes[k][0]), std::max(all[1], boxes[k][1]), std::min(all[2], boxes[k][2]),
+                   std::max(all[3], boxes[k][3])};
+        }
+        for (int a = all[0]; a <= all[1]; ++a)
+            for (int b = all[2]; b <= all[3]; ++b) {
+                const int t = a * g.n + b;
+                if (only >= 0 && t != only) continue;
+                for (const auto& box : boxes)
+                    if (a >= box[0] && a <= box[1] && b >= box[2] && b <= box[3]) {
+                        add(t);
+                        break;
+                    }
+            }
+    });
 }
 
 /// Vertices inside each grown tile (an estimate of the tile's size with its halo).
@@ -99,13 +164,14 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
     // Border distances are searched up to 2R; balls with their margin reach R + 4 h_L + 2 h_0.
     const double halo = std::max(2.0 * options.radius, options.radius + 4.0 * hCoarse + 2.0 * h0) + 2.0 * h0;
 
-    // Memory: the mesh (points, triangles, tile of each vertex, local indices) stays whole,
-    // and with keepColumns its result columns; each tile's computation comes on top.
+    // Memory: the mesh (points, triangles), the tiles' vertex and triangle lists (halos make
+    // the latter about 1.2-1.5 times the triangles) and local indices stay whole, and with
+    // keepColumns the result columns; each tile's computation comes on top.
     const std::size_t nv = mesh.numVertices();
     const int invariants = int(options.computeVolume) + int(options.computeSphere) +
                            int(options.computePatch) + int(options.computeLine);
     const double fixedBytes = double(nv) * (32.0 + (keepColumns ? 4.0 * invariants * options.scales : 0.0)) +
-                              double(mesh.numTriangles()) * 12.0;
+                              double(mesh.numTriangles()) * 18.0;
     const double perVertex = kBytesPerTileVertex * std::max(1.0, options.scales / 16.0);
     int n = tiling.tilesPerAxis;
     std::vector<std::size_t> sizes;
@@ -145,37 +211,39 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
     result.invariants.levelOfRadius = result.patchLine.levelOfRadius = levels;
     result.invariants.numLevels = *std::max_element(levels.begin(), levels.end()) + 1;
 
-    std::vector<int> tileOf(nv);
-    std::vector<bool> tileHasVertices(std::size_t(n) * std::size_t(n), false);
-    for (std::size_t i = 0; i < nv; ++i) tileHasVertices[std::size_t(tileOf[i] = grid.tileOf(mesh.points[i]))] = true;
-    const std::size_t tilesWithVertices = std::size_t(std::count(tileHasVertices.begin(), tileHasVertices.end(), true));
+    // Each tile's own vertices and the triangles of its grown box, sorted out in one pass each.
+    const std::size_t numTiles = std::size_t(n) * std::size_t(n);
+    const Buckets ownVertices = bucketize(numTiles, nv, [&](std::size_t i, const auto& add) {
+        add(grid.tileOf(mesh.points[i]));
+    });
+    const Buckets tileTriangles = trianglesOfGrownTiles(mesh, grid, halo, tiling.onlyTile);
+    std::size_t tilesWithVertices = 0;
+    for (int t = 0; t < n * n; ++t) tilesWithVertices += ownVertices.begin(t) != ownVertices.end(t);
     ComputeOptions tileOptions = options;
     tileOptions.voxelSize = plan.voxelSize;  // the whole mesh's grid, so that tiles agree
     tileOptions.repair = false;              // already done on the whole mesh
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
     const float nan = std::numeric_limits<float>::quiet_NaN();
     std::size_t computed = 0, masked = 0;
-    std::vector<std::uint32_t> local;
+    std::vector<std::uint32_t> local(nv, kNone), global;  // vertex numbers in and out of the tile
     for (int t = 0; t < n * n; ++t) {
         if (tiling.onlyTile >= 0 && t != tiling.onlyTile) continue;
+        if (ownVertices.begin(t) == ownVertices.end(t)) continue;
         TileResult part;
         part.tile = t;
-        if (!tileHasVertices[std::size_t(t)]) continue;
-        for (std::size_t i = 0; i < nv; ++i)
-            if (tileOf[i] == t) part.vertices.push_back(std::uint32_t(i));
-        // The tile's triangles: those with a vertex in the grown tile.
+        part.vertices.assign(ownVertices.begin(t), ownVertices.end(t));
+        // The tile's triangles: those with a vertex in the grown tile, in mesh order.
         TriMesh tile;
-        local.assign(nv, kNone);
-        for (const Triangle& tri : mesh.triangles) {
-            if (!inGrownTile(grid, t, mesh.points[tri[0]], halo) && !inGrownTile(grid, t, mesh.points[tri[1]], halo) &&
-                !inGrownTile(grid, t, mesh.points[tri[2]], halo))
-                continue;
+        tile.triangles.reserve(std::size_t(tileTriangles.end(t) - tileTriangles.begin(t)));
+        for (const std::uint32_t* f = tileTriangles.begin(t); f != tileTriangles.end(t); ++f) {
+            const Triangle& tri = mesh.triangles[*f];
             Triangle lt;
             for (int k = 0; k < 3; ++k) {
                 std::uint32_t& l = local[tri[std::size_t(k)]];
                 if (l == kNone) {
                     l = std::uint32_t(tile.points.size());
                     tile.points.push_back(mesh.points[tri[std::size_t(k)]]);
+                    global.push_back(tri[std::size_t(k)]);
                 }
                 lt[std::size_t(k)] = l;
             }
@@ -203,6 +271,8 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
         own(values.invariants.sphere);
         own(values.patchLine.patch);
         own(values.patchLine.line);
+        for (std::uint32_t v : global) local[v] = kNone;
+        global.clear();
         for (const auto* columns : {&values.invariants.volume, &values.invariants.sphere})
             for (const auto& column : *columns)
                 for (float v : column) masked += std::isnan(v);
