@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -151,4 +152,68 @@ TEST(TiledCompute, BudgetTooSmallForOneTile)
     co.exact = true;
     to.tilesPerAxis = 2;
     EXPECT_THROW(computeTiled(mesh, co, to), InvalidInputError);
+}
+
+// computeTiles (results handed over tile by tile, never held whole): every vertex arrives
+// exactly once, in ascending order within its tile, with the values of the untiled run; the
+// tiles' vertices are those of tileOfVertices; onlyTile hands over that tile alone; the
+// returned result has no feature columns but counts the masked values.
+TEST(TiledCompute, TilesHandedToASinkCoverEveryVertexOnce)
+{
+    TriMesh mesh = tablet();
+    ComputeOptions co;
+    co.radius = 1.0;
+    co.computePatch = false;  // quicker; L still exercises the P/L columns
+    TriMesh whole = mesh;
+    const ComputeResult untiled = computeInvariants(whole, co);
+    TilingOptions to;
+    to.tilesPerAxis = 3;
+    const std::vector<int> owner = tileOfVertices(mesh, 3);
+    std::vector<int> seen(mesh.numVertices(), 0);
+    std::size_t parts = 0, mismatches = 0, outOfOrder = 0, wrongTile = 0;
+    const auto sink = [&](const TileResult& part) {
+        ++parts;
+        ASSERT_EQ(part.values.invariants.volume.size(), untiled.invariants.volume.size());
+        ASSERT_EQ(part.values.patchLine.line.size(), untiled.patchLine.line.size());
+        EXPECT_TRUE(part.values.patchLine.patch.empty());
+        for (std::size_t l = 0; l < part.vertices.size(); ++l) {
+            const std::uint32_t v = part.vertices[l];
+            ++seen[v];
+            if (l > 0 && v <= part.vertices[l - 1]) ++outOfOrder;
+            if (owner[v] != part.tile) ++wrongTile;
+            const auto check = [&](const std::vector<std::vector<float>>& got, const std::vector<std::vector<float>>& want) {
+                for (std::size_t j = 0; j < want.size(); ++j) {
+                    const float a = got[j][l], b = want[j][v];
+                    if (std::isnan(a) != std::isnan(b) || (!std::isnan(a) && a != b)) ++mismatches;
+                }
+            };
+            check(part.values.invariants.volume, untiled.invariants.volume);
+            check(part.values.invariants.sphere, untiled.invariants.sphere);
+            check(part.values.patchLine.line, untiled.patchLine.line);
+        }
+    };
+    TriMesh copy = mesh;
+    const ComputeResult tiled = computeTiles(copy, co, to, sink);
+    EXPECT_EQ(parts, 9u);
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), std::ptrdiff_t(mesh.numVertices()));
+    EXPECT_EQ(outOfOrder, 0u);
+    EXPECT_EQ(wrongTile, 0u);
+    EXPECT_EQ(mismatches, 0u);  // bit-identical
+    EXPECT_TRUE(tiled.invariants.volume.empty());
+    EXPECT_EQ(tiled.invariants.numMaskedValues, untiled.invariants.numMaskedValues);
+
+    to.onlyTile = 4;
+    parts = 0;
+    std::fill(seen.begin(), seen.end(), 0);
+    TriMesh again = mesh;
+    computeTiles(again, co, to, sink);
+    EXPECT_EQ(parts, 1u);
+    std::size_t inTile4 = 0, seenOutside = 0;
+    for (std::size_t v = 0; v < seen.size(); ++v) {
+        inTile4 += owner[v] == 4;
+        seenOutside += owner[v] != 4 && seen[v] != 0;
+    }
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), std::ptrdiff_t(inTile4));
+    EXPECT_EQ(seenOutside, 0u);
+    EXPECT_EQ(mismatches, 0u);
 }

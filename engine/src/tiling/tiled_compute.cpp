@@ -273,9 +273,8 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
         own(values.patchLine.line);
         for (std::uint32_t v : global) local[v] = kNone;
         global.clear();
-        for (const auto* columns : {&values.invariants.volume, &values.invariants.sphere})
-            for (const auto& column : *columns)
-                for (float v : column) masked += std::isnan(v);
+        for (const auto& column : values.invariants.volume)  // counted as computeVolumeSphere does
+            for (float v : column) masked += std::isnan(v);
         const ComputeTimings& pt = values.timings;
         ComputeTimings& rt = result.timings;
         rt.levelSet += pt.levelSet, rt.occupancy += pt.occupancy, rt.stencils += pt.stencils;
