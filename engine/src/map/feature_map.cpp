@@ -165,13 +165,17 @@ FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, con
                         for (std::size_t q = 3; q < numValues; ++q) band[(2 + q) * chunkPixels + at] = value[q];
                     }
             });
+            if (options.half)
+                tbb::parallel_for(std::size_t(0), nc, [&](std::size_t c) {
+                    half* h = reinterpret_cast<half*>(bandHalf.data() + c * chunkPixels);
+                    const float* f = band.data() + c * chunkPixels;
+                    for (std::size_t i = 0; i < std::size_t(rows) * std::size_t(width); ++i) h[i] = half(f[i]);
+                });
             Imf::FrameBuffer fb;
             for (std::size_t c = 0; c < nc; ++c) {
                 // Slices address pixel (x, y) as base + x·xStride + y·yStride: shift by y0 rows.
                 if (options.half) {
                     half* h = reinterpret_cast<half*>(bandHalf.data() + c * chunkPixels);
-                    const float* f = band.data() + c * chunkPixels;
-                    for (std::size_t i = 0; i < std::size_t(rows) * std::size_t(width); ++i) h[i] = half(f[i]);
                     char* base = reinterpret_cast<char*>(h) - std::ptrdiff_t(y0) * width * std::ptrdiff_t(sizeof(half));
                     fb.insert(names[c], Imf::Slice(Imf::HALF, base, sizeof(half), sizeof(half) * std::size_t(width)));
                 } else {
