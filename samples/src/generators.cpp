@@ -947,7 +947,6 @@ StreamedMeshCounts writeHeightFieldPly(const HeightFieldOptions& options, const 
     // box diagonal, which is at least this (the corners (0, 0) and (w, h) are vertices).
     const double floatTolerance = 1e-7 * std::sqrt(options.width * options.width + options.height * options.height);
     const std::size_t pointBytes = doublePoints ? 3 * sizeof(double) : 3 * sizeof(float);
-    constexpr std::size_t faceBytes = 1 + 3 * sizeof(std::int32_t);
 
     checkWritable(path);
     AtomicFile file(path);
@@ -1012,18 +1011,9 @@ StreamedMeshCounts writeHeightFieldPly(const HeightFieldOptions& options, const 
                                       triangles.data() + 2 * (std::size_t(j - j0) * std::size_t(nx) + std::size_t(i)));
                     }
             });
-            triangleBytes.resize(triangles.size() * faceBytes);
-            char* t = triangleBytes.data();
-            for (const Triangle& tri : triangles) {
-                *t++ = 3;
-                for (std::uint32_t v : tri) {
-                    const std::int32_t index = std::int32_t(v);
-                    std::memcpy(t, &index, sizeof(index));
-                    t += sizeof(index);
-                }
-            }
+            formatPlyFaces(triangles.data(), triangles.size(), triangleBytes);
             const std::uint64_t firstTriangle = 2 * std::uint64_t(j0) * std::uint64_t(nx);
-            file.writeAt(facesAt + firstTriangle * faceBytes, triangleBytes.data(), triangleBytes.size());
+            file.writeAt(facesAt + firstTriangle * kPlyFaceBytes, triangleBytes.data(), triangleBytes.size());
         }
         if (j1 == ny) break;
     }

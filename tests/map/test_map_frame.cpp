@@ -12,6 +12,7 @@
 #include <msii/core/errors.h>
 #include <msii/samples/generators.h>
 
+#include "../support/flat_patch.h"
 #include "../support/rotation.h"
 
 #include <gtest/gtest.h>
@@ -28,6 +29,7 @@
 #include <vector>
 
 using namespace msii;
+using msii::test::flatPatch;
 
 namespace msii {
 /// Readable Vec3 values in gtest messages.
@@ -43,18 +45,6 @@ void record(const std::string& key, double value)
     s.precision(3);
     s << value;
     ::testing::Test::RecordProperty(key, s.str());
-}
-
-/// An irregular flat patch over [0, w] × [0, h] at z = 0, triangles facing +z.
-TriMesh planeMesh(double w, double h, double spacing, std::uint64_t seed = 1)
-{
-    samples::HeightFieldOptions o;
-    o.kind = samples::HeightFieldKind::Plane;
-    o.width = w;
-    o.height = h;
-    o.spacing = spacing;
-    o.seed = seed;
-    return samples::makeHeightField(o);
 }
 
 TriMesh cubeMesh(double side, double spacing)
@@ -158,7 +148,7 @@ TEST_P(BestFitRotatedPlane, NormalAxesAndHeights)
 {
     const TiltCase c = GetParam();
     const test::Rotation rot(normalized(c.axis), c.angle);
-    TriMesh mesh = planeMesh(c.w, c.h, 0.5);
+    TriMesh mesh = flatPatch(c.w, c.h, 0.5);
     for (Vec3& p : mesh.points) p = rot(p) + c.offset;
     const double size = std::max(c.w, c.h);
 
@@ -213,7 +203,7 @@ TEST(BestFit, LinearHeightField)
 {
     // z = a x + b y + c over a 12 x 9 patch: normal (-a, -b, 1) / |.|, facing up.
     const double a = 0.3, b = -0.2, c = 1.7;
-    TriMesh mesh = planeMesh(12, 9, 0.3, 7);
+    TriMesh mesh = flatPatch(12, 9, 0.3, 7);
     for (Vec3& p : mesh.points) p.z = a * p.x + b * p.y + c;
     MapFrameOptions o;
     o.pixelSize = 0.1;
@@ -334,7 +324,7 @@ TEST(MapView, ParseRejects)
 
 TEST(MapResolution, LongerSidePixelSizeAndDpi)
 {
-    const TriMesh plane = planeMesh(20, 10, 0.5);
+    const TriMesh plane = flatPatch(20, 10, 0.5);
     {
         MapFrameOptions o = viewOptions("+z", 0);
         o.longerSidePixels = 200;
@@ -390,7 +380,7 @@ TEST(MapResolution, LongerSidePixelSizeAndDpi)
 
 TEST(MapResolution, Rejects)
 {
-    const TriMesh plane = planeMesh(20, 10, 0.5);
+    const TriMesh plane = flatPatch(20, 10, 0.5);
     const auto throws = [&](MapFrameOptions o, const char* what) {
         EXPECT_THROW(makeMapFrame(plane, o), InvalidInputError) << what;
     };
@@ -468,7 +458,7 @@ TEST(MapResolution, Rejects)
 TEST(MapPixels, CentresInsideBoundingBoxAndBoxInsideImage)
 {
     // [3, 23] x [-2, 8] at z = 0.
-    const TriMesh plane = translated(planeMesh(20, 10, 0.5), Vec3(3, -2, 0));
+    const TriMesh plane = translated(flatPatch(20, 10, 0.5), Vec3(3, -2, 0));
     for (double ps : {0.3, 0.5, 0.07, 1.7}) {
         const MapFrame f = makeMapFrame(plane, viewOptions("+z", ps));
         // Map coordinates are measured from the origin, the surface's centroid (13, 3, 0).
@@ -558,7 +548,7 @@ double barycentricError(const TriMesh& mesh, const MapFrame& f, const PixelHits&
 
 TEST(Rasterize, PlaneFromAboveIsFullyCovered)
 {
-    const TriMesh plane = planeMesh(20, 10, 0.25, 3);
+    const TriMesh plane = flatPatch(20, 10, 0.25, 3);
     for (const char* view : {"+z", "-z"}) {  // seen from behind too (both orientations count)
         const MapFrame f = makeMapFrame(plane, viewOptions(view, 0.04));  // 500 x 250
         ASSERT_EQ(f.width, 500);
@@ -591,7 +581,7 @@ TEST(Rasterize, RotatedPlaneBestFitHasNoGaps)
     const double w = 16, h = 11;
     const test::Rotation rot(normalized(Vec3(0.3, -1, 0.8)), 0.9);
     const Vec3 offset(2.5, -7, 3.25);
-    TriMesh mesh = planeMesh(w, h, 0.2, 5);
+    TriMesh mesh = flatPatch(w, h, 0.2, 5);
     for (Vec3& p : mesh.points) p = rot(p) + offset;
     MapFrameOptions o;
     o.longerSidePixels = 480;
@@ -653,8 +643,8 @@ TEST(Rasterize, CentresExactlyOnVerticesAndSharedEdges)
 /// Two parallel squares: A = [0, 10]² at z = 0 (triangles first), B = [4, 14] × [3, 13] at z = 1.
 TEST(Rasterize, DepthTestShowsTheNearerSurface)
 {
-    const TriMesh a = planeMesh(10, 10, 0.5, 11);
-    TriMesh b = translated(planeMesh(10, 10, 0.5, 12), Vec3(4, 3, 1));
+    const TriMesh a = flatPatch(10, 10, 0.5, 11);
+    TriMesh b = translated(flatPatch(10, 10, 0.5, 12), Vec3(4, 3, 1));
     const TriMesh both = concat(a, b);
     const auto inA = [](std::uint32_t t, const TriMesh& m) { return t < m.numTriangles(); };
     for (const char* view : {"+z", "-z"}) {
@@ -706,7 +696,7 @@ TEST(Rasterize, DepthTestShowsTheNearerSurface)
 TEST(Rasterize, TiesGoToTheLowerTriangleIndex)
 {
     // The same patch twice: every pixel sees a triangle of the first copy.
-    const TriMesh a = planeMesh(10, 6, 0.4, 21);
+    const TriMesh a = flatPatch(10, 6, 0.4, 21);
     const TriMesh twice = concat(a, a);
     const MapFrame f = makeMapFrame(twice, viewOptions("+z", 0.05));
     const PixelHits hits = rasterize(twice, f);
@@ -772,7 +762,7 @@ TEST(Rasterize, SameResultWithOneAndTwoThreads)
 
 TEST(Rasterize, VertexNormalsAndInterpolate)
 {
-    TriMesh plane = planeMesh(6, 4, 0.5, 2);
+    TriMesh plane = flatPatch(6, 4, 0.5, 2);
     for (Vec3& p : plane.points) p.z = 0.5 * p.x - 0.25 * p.y;
     const Vec3 n = normalized(Vec3(-0.5, 0.25, 1));
     double worst = 0;
@@ -815,7 +805,7 @@ TEST(BestFit, ClosedWithTinyHoleAndSquareObjects)
     EXPECT_GT(dot(holed.normal, closed.normal), 0.999);  // the same side, not the other
     // A square plane (equal in-plane extents): u is +x whatever the jitter of the lattice.
     for (std::uint64_t seed : {1u, 2u, 3u}) {
-        const TriMesh plane = planeMesh(20, 20, 0.5, seed);
+        const TriMesh plane = flatPatch(20, 20, 0.5, seed);
         const MapFrame f = makeMapFrame(plane, o);
         expectVecNear(f.axisU, Vec3(1, 0, 0), 1e-9, "square plane u");
     }

@@ -22,10 +22,12 @@
 #include <tuple>
 #include <vector>
 
+#include "../support/flat_patch.h"
 #include "../support/files.h"
 #include "../support/temp_dir.h"
 
 using namespace msii;
+using msii::test::flatPatch;
 using msii::test::readFile;
 using msii::test::TempDir;
 
@@ -39,17 +41,6 @@ const float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr double kC = 5.0;
 constexpr double kCx = 10.0, kCy = 10.0;
 
-TriMesh makePlane(double width, double height, double spacing, std::uint64_t seed = 1)
-{
-    samples::HeightFieldOptions o;
-    o.kind = samples::HeightFieldKind::Plane;
-    o.width = width;
-    o.height = height;
-    o.spacing = spacing;
-    o.seed = seed;
-    return samples::makeHeightField(o);
-}
-
 double radiusOf(const Vec3& p) { return std::hypot(p.x - kCx, p.y - kCy); }
 
 /// The 20 x 20 mm irregular plane (spacing 0.2) lifted onto the paraboloid; f = z.
@@ -61,7 +52,7 @@ struct Paraboloid {
 Paraboloid makeParaboloid(double spacing = 0.2)
 {
     Paraboloid p;
-    p.mesh = makePlane(20, 20, spacing);
+    p.mesh = flatPatch(20, 20, spacing);
     p.f.resize(p.mesh.numVertices());
     for (std::size_t v = 0; v < p.f.size(); ++v) {
         Vec3& q = p.mesh.points[v];

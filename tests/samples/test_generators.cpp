@@ -25,17 +25,18 @@
 #include <iterator>
 #include <limits>
 #include <string>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <unordered_map>
 #include <utility>
 #include <vector>
 
 #include "../support/files.h"
+#include "../support/run_program.h"
 
 using namespace msii;
 using namespace msii::samples;
 using msii::test::readFile;
+using msii::test::RunResult;
+using msii::test::runProgram;
 
 namespace {
 
@@ -612,27 +613,7 @@ TEST(SampleOptions, InvalidValuesThrowInvalidInputError)
 
 namespace {
 
-struct RunResult {
-    int exitCode = -1;
-    std::string out, err;
-};
-
-RunResult runSamples(const std::string& args)
-{
-    // Unique names: ctest runs the tests of this file as parallel processes.
-    static int call = 0;
-    const std::string stem = ::testing::TempDir() + "msii_samples_" + std::to_string(getpid()) + "_" + std::to_string(++call);
-    const std::string out = stem + ".out", err = stem + ".err";
-    const std::string command = std::string("'") + MSII_SAMPLES_EXE + "' " + args + " >'" + out + "' 2>'" + err + "'";
-    const int status = std::system(command.c_str());
-    RunResult r;
-    r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = readFile(out);
-    r.err = readFile(err);
-    std::remove(out.c_str());
-    std::remove(err.c_str());
-    return r;
-}
+RunResult runSamples(const std::string& args) { return runProgram(MSII_SAMPLES_EXE, args, ::testing::TempDir()); }
 
 bool samplesExecutableExists() { return std::ifstream(MSII_SAMPLES_EXE).good(); }
 
@@ -640,7 +621,7 @@ void expectUsageError(const std::string& args, const std::string& mentions)
 {
     SCOPED_TRACE(args);
     const RunResult r = runSamples(args);
-    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_EQ(r.code, 2);
     EXPECT_EQ(r.err.rfind("msii-samples: error: ", 0), 0u) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     EXPECT_NE(r.err.find(mentions), std::string::npos) << r.err;
@@ -653,7 +634,7 @@ TEST(SampleCli, ListsTheShapes)
 {
     if (!samplesExecutableExists()) GTEST_SKIP() << "msii-samples not built";
     const RunResult r = runSamples("--list");
-    EXPECT_EQ(r.exitCode, 0);
+    EXPECT_EQ(r.code, 0);
     const std::string lines = "\n" + r.out;
     for (const char* shape : {"sphere", "cavity", "cube", "plane", "terrain", "tablet"})
         EXPECT_NE(lines.find(std::string("\n") + shape + " "), std::string::npos) << shape;
@@ -664,7 +645,7 @@ TEST(SampleCli, HelpExitsZero)
 {
     if (!samplesExecutableExists()) GTEST_SKIP() << "msii-samples not built";
     const RunResult r = runSamples("--help");
-    EXPECT_EQ(r.exitCode, 0);
+    EXPECT_EQ(r.code, 0);
     EXPECT_NE(r.out.find("--spacing"), std::string::npos);
 }
 
@@ -726,7 +707,7 @@ TEST(SampleCli, OpenHeightFieldsAreStreamedToTheSameFile)
     if (!samplesExecutableExists()) GTEST_SKIP() << "msii-samples not built";
     const std::string file = ::testing::TempDir() + "cli_terrain.ply";
     const RunResult r = runSamples("terrain --width 6 --height 4 --spacing 0.05 --seed 9 -q --output '" + file + "'");
-    ASSERT_EQ(r.exitCode, 0) << r.err;
+    ASSERT_EQ(r.code, 0) << r.err;
     HeightFieldOptions o;
     o.kind = HeightFieldKind::Terrain;
     o.width = 6;

@@ -16,7 +16,10 @@
 #include <limits>
 #include <vector>
 
+#include "../support/flat_patch.h"
+
 using namespace msii;
+using msii::test::flatPatch;
 
 namespace {
 
@@ -26,17 +29,6 @@ const float kNaN = std::numeric_limits<float>::quiet_NaN();
 struct Disc {
     double cx, cy, r;
 };
-
-TriMesh makePlane(double width, double height, double spacing, std::uint64_t seed = 1)
-{
-    samples::HeightFieldOptions o;
-    o.kind = samples::HeightFieldKind::Plane;
-    o.width = width;
-    o.height = height;
-    o.spacing = spacing;
-    o.seed = seed;
-    return samples::makeHeightField(o);
-}
 
 bool inside(const Vec3& p, const Disc& d)
 {
@@ -90,7 +82,7 @@ std::vector<Disc> allDiscs()
 
 TEST(Components, DiscsOnIrregularPlane)
 {
-    const TriMesh mesh = makePlane(20, 20, kSpacing);
+    const TriMesh mesh = flatPatch(20, 20, kSpacing);
     const std::vector<float> f = discField(mesh, allDiscs());
     ComponentOptions options;
     options.threshold = 0.5;
@@ -168,7 +160,7 @@ TEST(Components, DiscsOnIrregularPlane)
 
 TEST(Components, AreaFilter)
 {
-    const TriMesh mesh = makePlane(20, 20, kSpacing);
+    const TriMesh mesh = flatPatch(20, 20, kSpacing);
     const std::vector<float> f = discField(mesh, allDiscs());
     ComponentOptions options;
     options.threshold = 1.0;      // f >= 1: the discs (the threshold itself passes)
@@ -184,7 +176,7 @@ TEST(Components, AreaFilter)
 
 TEST(Components, BelowSelectsTheComplement)
 {
-    const TriMesh mesh = makePlane(20, 20, kSpacing);
+    const TriMesh mesh = flatPatch(20, 20, kSpacing);
     const std::vector<Disc> discs = allDiscs();
     const std::vector<float> f = discField(mesh, discs);
     ComponentOptions options;
@@ -252,7 +244,7 @@ TEST(Components, OneTriangleByHand)
 TEST(Components, NaNIsNeverSelected)
 {
     // f = 1 everywhere but a NaN strip |x - 7| < 0.3 that cuts the plane in two.
-    const TriMesh mesh = makePlane(20, 20, kSpacing);
+    const TriMesh mesh = flatPatch(20, 20, kSpacing);
     std::vector<float> f(mesh.numVertices(), 1.0f);
     std::size_t nanCount = 0;
     for (std::size_t v = 0; v < f.size(); ++v) {
@@ -292,8 +284,8 @@ TEST(Components, DisconnectedPiecesHaveExactAreasAndCentroids)
     // A 2 x 2 piece first, then a 4 x 3 piece beside it: the larger one is label 1 although
     // its vertices come later. Barycentric cells weight the vertices exactly like the area
     // centroid of the triangles, so for flat rectangles area and centroid are exact.
-    const TriMesh small = makePlane(2, 2, 0.25, 3);
-    const TriMesh large = makePlane(4, 3, 0.25, 4);
+    const TriMesh small = flatPatch(2, 2, 0.25, 3);
+    const TriMesh large = flatPatch(4, 3, 0.25, 4);
     TriMesh mesh;
     append(mesh, small, {10, 0, 0});
     append(mesh, large, {0, 0, 1});
@@ -325,7 +317,7 @@ TEST(Components, EqualAreasAreOrderedBySmallestVertexAndIsolatedVerticesCount)
 {
     // Two copies of one piece (the second lifted in z: bit-identical areas) and a selected
     // vertex that belongs to no triangle.
-    const TriMesh piece = makePlane(3, 2, 0.25, 5);
+    const TriMesh piece = flatPatch(3, 2, 0.25, 5);
     TriMesh mesh;
     append(mesh, piece, {0, 0, 0});
     append(mesh, piece, {0, 0, 5});
@@ -366,7 +358,7 @@ TEST(Components, GaussianDimples)
                                          {4, 10, 0.15, 0.9}, {10, 10, 0.4, 0.5}, {16, 10, 0.25, 0.8},
                                          {10, 16, 0.05, 0.8}};  // the last one is too shallow
     const double t = 0.08;
-    TriMesh mesh = makePlane(20, 20, kSpacing, 7);
+    TriMesh mesh = flatPatch(20, 20, kSpacing, 7);
     std::vector<float> f(mesh.numVertices());
     for (std::size_t v = 0; v < mesh.numVertices(); ++v) {
         Vec3& p = mesh.points[v];
@@ -474,7 +466,7 @@ TEST(Components, TabletWedgePits)
 
 TEST(Components, BadInputThrows)
 {
-    const TriMesh mesh = makePlane(2, 2, 0.5);
+    const TriMesh mesh = flatPatch(2, 2, 0.5);
     const std::vector<float> f(mesh.numVertices(), 1.0f);
     EXPECT_THROW(findComponents(mesh, std::vector<float>(mesh.numVertices() - 1, 1.0f)), InvalidInputError);
     EXPECT_THROW(findComponents(mesh, std::vector<float>{}), InvalidInputError);

@@ -7,7 +7,6 @@
 
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
 
 #include <algorithm>
 #include <cmath>
@@ -22,19 +21,17 @@
 #include <vector>
 
 #include "../support/files.h"
+#include "../support/run_program.h"
 #include "../support/temp_dir.h"
 
 namespace fs = std::filesystem;
 using namespace msii;
 using msii::test::readFile;
+using msii::test::RunResult;
+using msii::test::runProgram;
 using msii::test::writeFile;
 
 namespace {
-
-struct RunResult {
-    int code = -1;
-    std::string err;
-};
 
 /// One folder for the whole test program, removed at exit.
 const fs::path& tempDir()
@@ -43,16 +40,7 @@ const fs::path& tempDir()
     return dir.path();
 }
 
-RunResult runMsii(const std::string& args)
-{
-    const fs::path err = tempDir() / "stderr.txt";
-    const std::string cmd = std::string("'") + MSII_EXE + "' " + args + " >/dev/null 2>'" + err.string() + "'";
-    const int status = std::system(cmd.c_str());
-    RunResult r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.err = readFile(err.string());
-    return r;
-}
+RunResult runMsii(const std::string& args) { return runProgram(MSII_EXE, args, tempDir()); }
 
 std::string writeText(const std::string& name, const std::string& text)
 {

@@ -15,7 +15,6 @@
 
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
 
 #include <algorithm>
 #include <array>
@@ -33,19 +32,17 @@
 #include <vector>
 
 #include "../support/files.h"
+#include "../support/run_program.h"
 #include "../support/temp_dir.h"
 
 namespace fs = std::filesystem;
 using namespace msii;
 using msii::test::readFile;
+using msii::test::RunResult;
+using msii::test::runProgram;
 using msii::test::writeFile;
 
 namespace {
-
-struct RunResult {
-    int code = -1;
-    std::string out, err;
-};
 
 /// One folder for the whole test program, removed at exit.
 const fs::path& tempDir()
@@ -56,20 +53,7 @@ const fs::path& tempDir()
 
 std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
 
-/// Runs `<exe> <args>`, capturing the exit code, stdout and stderr.
-RunResult run(const std::string& exe, const std::string& args)
-{
-    const fs::path out = tempDir() / ".stdout.txt", err = tempDir() / ".stderr.txt";
-    const std::string cmd = "'" + exe + "' " + args + " >" + quoted(out) + " 2>" + quoted(err);
-    const int status = std::system(cmd.c_str());
-    RunResult r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = readFile(out.string());
-    r.err = readFile(err.string());
-    fs::remove(out);
-    fs::remove(err);
-    return r;
-}
+RunResult run(const std::string& exe, const std::string& args) { return runProgram(exe, args, tempDir()); }
 
 RunResult runMsii(const std::string& args) { return run(MSII_EXE, args); }
 

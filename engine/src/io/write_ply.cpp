@@ -131,18 +131,6 @@ void validate(const std::string& path, const TriMesh& mesh, const std::vector<st
                                         std::to_string(n) + " vertices" + where);
 }
 
-constexpr std::size_t kFaceBytes = 1 + 3 * sizeof(std::int32_t);
-
-void formatBinaryFaces(const TriMesh& mesh, std::size_t begin, std::size_t end, Buffer& buffer)
-{
-    buffer.resize((end - begin) * kFaceBytes);
-    char* out = buffer.data();
-    for (std::size_t f = begin; f < end; ++f) {
-        *out++ = 3;
-        for (std::uint32_t v : mesh.triangles[f]) out = put(out, std::int32_t(v));
-    }
-}
-
 char* putPoint(char* out, const Vec3& p, bool doublePoints)
 {
     if (doublePoints) {
@@ -201,7 +189,7 @@ void writePly(const std::string& path, const TriMesh& mesh,
             }
         });
         writeInChunks(file, numFaces, [&](std::size_t begin, std::size_t end, Buffer& buffer) {
-            formatBinaryFaces(mesh, begin, end, buffer);
+            formatPlyFaces(mesh.triangles.data() + begin, end - begin, buffer);
         });
     } else {
         writeInChunks(file, numVertices, [&](std::size_t begin, std::size_t end, Buffer& buffer) {
@@ -237,6 +225,16 @@ void writePly(const std::string& path, const TriMesh& mesh,
         });
     }
     file.commit();
+}
+
+void formatPlyFaces(const Triangle* triangles, std::size_t count, std::vector<char>& bytes)
+{
+    bytes.resize(count * kPlyFaceBytes);
+    char* out = bytes.data();
+    for (std::size_t f = 0; f < count; ++f) {
+        *out++ = 3;
+        for (std::uint32_t v : triangles[f]) out = put(out, std::int32_t(v));
+    }
 }
 
 std::string plyHeader(std::size_t numVertices, std::size_t numFaces, const std::vector<std::string>& propertyNames,
@@ -313,7 +311,7 @@ PlyPieceWriter::PlyPieceWriter(const std::string& path, const TriMesh& mesh,
     constexpr std::size_t kFaces = std::size_t(1) << 18;
     Buffer buffer;
     for (std::size_t f = 0; f < mesh.numTriangles(); f += kFaces) {
-        formatBinaryFaces(mesh, f, std::min(mesh.numTriangles(), f + kFaces), buffer);
+        formatPlyFaces(mesh.triangles.data() + f, std::min(mesh.numTriangles() - f, kFaces), buffer);
         s.file.writeAt(at, buffer.data(), buffer.size());
         at += buffer.size();
     }

@@ -112,15 +112,15 @@ Buckets trianglesOfGrownTiles(const TriMesh& mesh, const TileGrid& g, double hal
     });
 }
 
-/// Vertices inside each grown tile (an estimate of the tile's size with its halo).
+/// Vertices inside each grown tile (its size with the halo, but for the few outside vertices
+/// of triangles that reach in).
 std::vector<std::size_t> grownTileSizes(const TriMesh& mesh, const TileGrid& g, double halo)
 {
     std::vector<std::size_t> count(std::size_t(g.n) * g.n, 0);
     for (const Vec3& p : mesh.points) {
-        const int a0 = g.cell(p[g.axisA] - halo, g.minA, g.sizeA), a1 = g.cell(p[g.axisA] + halo, g.minA, g.sizeA);
-        const int b0 = g.cell(p[g.axisB] - halo, g.minB, g.sizeB), b1 = g.cell(p[g.axisB] + halo, g.minB, g.sizeB);
-        for (int a = a0; a <= a1; ++a)
-            for (int b = b0; b <= b1; ++b) ++count[std::size_t(a * g.n + b)];
+        const std::array<int, 4> r = grownTilesOf(g, p, halo);
+        for (int a = r[0]; a <= r[1]; ++a)
+            for (int b = r[2]; b <= r[3]; ++b) ++count[std::size_t(a * g.n + b)];
     }
     return count;
 }

@@ -38,6 +38,13 @@ void writePly(const std::string& path, const TriMesh& mesh,
 std::string plyHeader(std::size_t numVertices, std::size_t numFaces, const std::vector<std::string>& propertyNames,
                       const WritePlyOptions& options, bool doublePoints);
 
+/// Bytes of one binary face record (`property list uchar int vertex_indices` of a triangle).
+constexpr std::size_t kPlyFaceBytes = 1 + 3 * sizeof(std::int32_t);
+
+/// The binary (little endian) face records of @p count triangles, as writePly writes them,
+/// into @p bytes (resized to count · kPlyFaceBytes).
+void formatPlyFaces(const Triangle* triangles, std::size_t count, std::vector<char>& bytes);
+
 /// A binary PLY written in pieces, for results larger than memory (the tiled compute): the
 /// header and the faces are written at once, the vertex records as their values arrive, in
 /// any order, straight to their place in the file. Vertices never given get NaN values. The
