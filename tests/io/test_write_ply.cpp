@@ -17,6 +17,9 @@
 #include <string>
 #include <vector>
 
+#include <csignal>
+
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "../support/files.h"
@@ -357,5 +360,29 @@ TEST(AtomicFile, ClearErrors)
         EXPECT_THROW(checkWritable(dir.file("readonly/out.txt")), IOError);
         EXPECT_THROW(AtomicFile(dir.file("readonly/out.txt")), IOError);
         fs::permissions(dir.file("readonly"), fs::perms::owner_all);
+    }
+}
+
+// An interrupted process (Ctrl-C, kill, a closed terminal) leaves neither the target nor its
+// temporary file: a child opens two AtomicFiles, writes, and is killed by each signal.
+TEST(AtomicFile, InterruptionRemovesTheTemporaryFiles)
+{
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+        TempDir dir;
+        writeTextFileAtomic(dir.file("old.txt"), "original");
+        const pid_t child = ::fork();
+        ASSERT_GE(child, 0);
+        if (child == 0) {
+            AtomicFile a(dir.file("a.ply")), b(dir.file("old.txt"));
+            a.write(std::string(100000, 'x'));
+            b.write(std::string("new"));
+            ::raise(sig);
+            ::_exit(0);  // not reached
+        }
+        int status = 0;
+        ASSERT_EQ(::waitpid(child, &status, 0), child);
+        EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << "signal " << sig;
+        EXPECT_EQ(dir.entries(), std::vector<std::string>{"old.txt"}) << "signal " << sig;
+        EXPECT_EQ(readFile(dir.file("old.txt")), "original");
     }
 }

@@ -7,6 +7,9 @@
 #include <cstring>
 #include <filesystem>
 
+#include <csignal>
+#include <cstdlib>
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -55,6 +58,59 @@ void checkTarget(const std::string& target)
         throwWriteError(target, "'" + folder.string() + "' is not a folder");
 }
 
+// ---------------------------------------------------------------------------------------
+// Temporary files open in this process, removed if it is interrupted (Ctrl-C, kill, a
+// closed terminal) so that an interrupted run leaves nothing behind, not even a hidden
+// temporary file (a tiled output can be many GB). The handler only calls unlink(), which is
+// async-signal-safe, on paths held in lock-free slots.
+
+constexpr int kTemporarySlots = 64;
+std::atomic<char*> gTemporaries[kTemporarySlots];
+
+extern "C" void removeTemporariesAndDie(int signal)
+{
+    for (auto& slot : gTemporaries)
+        if (char* path = slot.load()) ::unlink(path);
+    std::signal(signal, SIG_DFL);
+    std::raise(signal);
+}
+
+/// Installs the handler for SIGINT, SIGTERM and SIGHUP where the program has none of its own.
+void installInterruptCleanup()
+{
+    static const bool installed = [] {
+        for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+            struct sigaction old {};
+            if (::sigaction(sig, nullptr, &old) != 0 || old.sa_handler != SIG_DFL) continue;
+            struct sigaction action {};
+            action.sa_handler = removeTemporariesAndDie;
+            sigemptyset(&action.sa_mask);
+            ::sigaction(sig, &action, nullptr);
+        }
+        return true;
+    }();
+    (void)installed;
+}
+
+/// Registers @p path for removal on interruption; returns its slot (-1 if all are taken).
+int registerTemporary(const std::string& path)
+{
+    installInterruptCleanup();
+    char* copy = ::strdup(path.c_str());
+    if (!copy) return -1;
+    for (int i = 0; i < kTemporarySlots; ++i) {
+        char* expected = nullptr;
+        if (gTemporaries[i].compare_exchange_strong(expected, copy)) return i;
+    }
+    std::free(copy);
+    return -1;
+}
+
+void unregisterTemporary(int slot)
+{
+    if (slot >= 0) std::free(gTemporaries[slot].exchange(nullptr));
+}
+
 } // namespace
 
 AtomicFile::AtomicFile(const std::string& target) : mTarget(target)
@@ -87,12 +143,14 @@ AtomicFile::AtomicFile(const std::string& target) : mTarget(target)
         mTemp.clear();
         throwWriteError(target, errnoText(code));
     }
+    mSlot = registerTemporary(mTemp);
 }
 
 AtomicFile::~AtomicFile()
 {
     if (mFile) std::fclose(mFile);
     if (!mCommitted && !mTemp.empty()) ::unlink(mTemp.c_str());
+    unregisterTemporary(mSlot);
 }
 
 void AtomicFile::write(const void* data, std::size_t bytes)
@@ -136,6 +194,8 @@ void AtomicFile::commit()
     if (!closed) throwWriteError(mTarget, errnoText(closeErrno));
     if (std::rename(mTemp.c_str(), mTarget.c_str()) != 0) throwWriteError(mTarget, errnoText(errno));
     mCommitted = true;
+    unregisterTemporary(mSlot);
+    mSlot = -1;
 }
 
 void checkWritable(const std::string& target)

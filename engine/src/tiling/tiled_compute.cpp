@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 
@@ -125,11 +126,14 @@ std::vector<std::size_t> grownTileSizes(const TriMesh& mesh, const TileGrid& g, 
     return count;
 }
 
-std::string gigabytes(double bytes)
+/// "2.40 GB", "35.0 MB", "12 kB".
+std::string readableBytes(double bytes)
 {
     std::ostringstream s;
-    s.precision(2);
-    s << std::fixed << bytes / 1e9 << " GB";
+    s << std::fixed;
+    if (bytes >= 1e9) s << std::setprecision(2) << bytes / 1e9 << " GB";
+    else if (bytes >= 1e6) s << std::setprecision(1) << bytes / 1e6 << " MB";
+    else s << std::setprecision(0) << bytes / 1e3 << " kB";
     return s.str();
 }
 
@@ -178,9 +182,9 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
     TileGrid grid;
     if (n == 0) {
         if (tiling.memoryBudget > 0 && tiling.memoryBudget <= fixedBytes)
-            throw InvalidInputError("the memory budget of " + gigabytes(tiling.memoryBudget) +
+            throw InvalidInputError("the memory budget of " + readableBytes(tiling.memoryBudget) +
                                     " is too small for even one tile: the mesh" +
-                                    (keepColumns ? " and its results" : "") + " alone take " + gigabytes(fixedBytes));
+                                    (keepColumns ? " and its results alone take " : " alone takes ") + readableBytes(fixedBytes));
         const double allowed = tiling.memoryBudget > 0 ? (tiling.memoryBudget - fixedBytes) / perVertex
                                                        : std::numeric_limits<double>::max();
         const Vec3 ext = plan.stats.bboxMax - plan.stats.bboxMin;
@@ -192,9 +196,13 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
             // Tiles much narrower than their halo would be mostly halo: give up.
             if (longest / n < 0.5 * halo || n >= 1024) {
                 const double needed = fixedBytes + perVertex * double(*std::max_element(sizes.begin(), sizes.end()));
-                throw InvalidInputError("the memory budget of " + gigabytes(tiling.memoryBudget) +
+                throw InvalidInputError("the memory budget of " + readableBytes(tiling.memoryBudget) +
                                         " is too small for even one tile (tiles narrower than their halo of " +
-                                        std::to_string(halo) + " would still need about " + gigabytes(needed) +
+                                        [&] {
+                                            std::ostringstream h;
+                                            h << std::setprecision(3) << halo;
+                                            return h.str();
+                                        }() + " would still need about " + readableBytes(needed) +
                                         "); raise the budget or use a smaller radius");
             }
         }

@@ -1,7 +1,8 @@
 #pragma once
 /// @file atomic_file.h
 /// @brief Output files appear whole or not at all: data goes to a temporary file in the
-/// target's folder, which is renamed over the target on commit() and removed otherwise.
+/// target's folder, which is renamed over the target on commit() and removed otherwise, also
+/// when the process is interrupted (SIGINT, SIGTERM, SIGHUP, unless the program handles them).
 
 #include <cstdint>
 #include <cstdio>
@@ -34,6 +35,7 @@ private:
     std::string mTarget, mTemp;
     std::FILE* mFile = nullptr;
     bool mCommitted = false;
+    int mSlot = -1;  ///< registration for removal on interruption
 };
 
 /// Checks up front that @p target can be created (folder exists and is writable; the
