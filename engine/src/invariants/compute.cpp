@@ -117,7 +117,9 @@ ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Pr
         throw InvalidInputError("no invariant selected (choose any of V, S, P, L)");
     std::vector<double> border;
     if (!result.check.closed)
-        border = borderDistance(mesh, result.check.borderEdges, 2.0 * options.radius);
+        border = borderDistance(mesh, result.check.borderEdges,
+                                dependenceReach(radii, result.voxelSize, options.minVoxelsPerRadius) +
+                                    2.0 * result.voxelSize);
     const float nan = std::numeric_limits<float>::quiet_NaN();
 
     if (options.exact) {

@@ -62,7 +62,27 @@ struct SampleSums {
     double area = 0;
     Vec3 moment;      // Σ a·c (first moment)
     std::array<double, 6> normalTensor{};  // Σ a·n nᵀ: xx, yy, zz, xy, xz, yz
+    /// Σ ∫ (x − o)(x − o)ᵀ dA over the pieces (same order), about the point o = origin
+    /// (a point of the sample, so that the covariance keeps its digits far from 0).
+    std::array<double, 6> secondMoment{};
+    Vec3 origin;
 };
+
+/// The six entries xx, yy, zz, xy, xz, yz of u vᵀ (symmetrised by the caller's use).
+inline std::array<double, 6> outer(const Vec3& u, const Vec3& v)
+{
+    return {u.x * v.x, u.y * v.y, u.z * v.z, u.x * v.y, u.x * v.z, u.y * v.z};
+}
+
+/// Adds the second moment of @p from (about its origin) to @p to, about to's origin.
+inline void addSecondMoment(SampleSums& to, const SampleSums& from)
+{
+    // x − o_to = (x − o_from) + δ: S + δ fᵀ + f δᵀ + a δ δᵀ, f = Σ a (x − o_from).
+    const Vec3 delta = from.origin - to.origin, f = from.moment - from.origin * from.area;
+    const auto df = outer(delta, f), fd = outer(f, delta), dd = outer(delta, delta);
+    for (std::size_t q = 0; q < 6; ++q)
+        to.secondMoment[q] += from.secondMoment[q] + (q < 3 ? 2.0 * df[q] : df[q] + fd[q]) + from.area * dd[q];
+}
 
 struct Level {
     int index = 0;  // l: cells of h0·2^l
@@ -73,6 +93,9 @@ struct Level {
     /// Mean of n nᵀ over the sample's area (xx, yy, zz, xy, xz, yz): (û·n)² averaged over a
     /// piece that spans a crease, where the mean normal would be wrong for both sides.
     std::array<std::vector<float>, 6> tensor;
+    /// Covariance of position over the sample's area (same order): how its area spreads
+    /// around the centroid, for the second-order quadrature of the kernel sums.
+    std::array<std::vector<float>, 6> covariance;
     std::unordered_map<std::uint64_t, std::pair<std::uint32_t, std::uint32_t>> blocks;
 };
 
@@ -167,13 +190,24 @@ std::vector<SampleSums> finestSamples(const TriMesh& mesh, double h0)
             const double a = norm(normalArea);
             const Vec3 nrm = a > 0 ? normalArea / a : Vec3();
             const Vec3 centroid = (c3[0] + c3[1] + c3[2]) / 3.0;
-            if (out.empty() || out.back().key != p.key) out.push_back(SampleSums{p.key, 0, {}, {}});
+            if (out.empty() || out.back().key != p.key) out.push_back(SampleSums{p.key, 0, {}, {}, {}, centroid});
+            // ∫ (x − o)(x − o)ᵀ dA over the piece: a (v vᵀ + Σ_k e_k e_kᵀ / 12), v = c − o,
+            // e_k = corner k − c.
+            const Vec3 offset = centroid - out.back().origin;
+            std::array<double, 6> second = outer(offset, offset);
+            for (const Vec3& corner : c3) {
+                const auto ee = outer(corner - centroid, corner - centroid);
+                for (std::size_t q = 0; q < 6; ++q) second[q] += ee[q] / 12.0;
+            }
             SampleSums& s = out.back();
             s.area += a;
             s.moment += centroid * a;
             const std::array<double, 6> nn{nrm.x * nrm.x, nrm.y * nrm.y, nrm.z * nrm.z,
                                            nrm.x * nrm.y, nrm.x * nrm.z, nrm.y * nrm.z};
-            for (int q = 0; q < 6; ++q) s.normalTensor[std::size_t(q)] += a * nn[std::size_t(q)];
+            for (std::size_t q = 0; q < 6; ++q) {
+                s.normalTensor[q] += a * nn[q];
+                s.secondMoment[q] += a * second[q];
+            }
         }
     });
     std::vector<SampleSums> samples;
@@ -186,8 +220,9 @@ std::vector<SampleSums> coarser(const std::vector<SampleSums>& fine)
     std::vector<SampleSums> out;
     for (const SampleSums& s : fine) {
         const std::uint64_t key = s.key >> 3;
-        if (out.empty() || out.back().key != key) out.push_back(SampleSums{key, 0, {}, {}});
+        if (out.empty() || out.back().key != key) out.push_back(SampleSums{key, 0, {}, {}, {}, s.origin});
         SampleSums& c = out.back();
+        addSecondMoment(c, s);
         c.area += s.area;
         c.moment += s.moment;
         for (std::size_t q = 0; q < 6; ++q) c.normalTensor[q] += s.normalTensor[q];
@@ -205,14 +240,19 @@ Level makeLevel(const std::vector<SampleSums>& sums, double h0, int index)
     level.cx.resize(n), level.cy.resize(n), level.cz.resize(n);
     level.area.resize(n);
     for (auto& t : level.tensor) t.resize(n);
+    for (auto& t : level.covariance) t.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
         const SampleSums& s = sums[i];
         level.key[i] = s.key;
         const Vec3 c = s.area > 0 ? s.moment / s.area : Vec3();
         level.cx[i] = c.x, level.cy[i] = c.y, level.cz[i] = c.z;
         level.area[i] = float(s.area);
-        for (std::size_t q = 0; q < 6; ++q)
+        const Vec3 v = c - s.origin;  // covariance = S/a − v vᵀ about the origin o
+        const auto cc = outer(v, v);
+        for (std::size_t q = 0; q < 6; ++q) {
             level.tensor[q][i] = s.area > 0 ? float(s.normalTensor[q] / s.area) : 0.0f;
+            level.covariance[q][i] = s.area > 0 ? float(s.secondMoment[q] / s.area - cc[q]) : 0.0f;
+        }
     }
     for (std::size_t i = 0; i < n;) {
         std::size_t e = i;
@@ -224,8 +264,11 @@ Level makeLevel(const std::vector<SampleSums>& sums, double h0, int index)
 }
 
 // ---------------------------------------------------------------------------------------
-// The kernel: cubic B-spline K (knots at the integers, support [-2, 2], ∫K = 1, variance 1/3)
-// and its integral F.
+// The kernel. K is built from the cubic B-spline B (knots at the integers, support [-2, 2],
+// ∫B = 1, variance 1/3) as K(t) = 4/3 B(t) − 1/6 (B(t + 1) + B(t − 1)): ∫K = 1 and its
+// second moment is 0, so blurring across r with K leaves any P(r) and L(r) that is locally
+// quadratic unchanged (P ∗ K = P + O(w⁴ P⁗)). K is as smooth as B (C²), with support
+// [-3, 3]. F is its integral; K′ and K″ serve the second-order terms of the quadrature.
 
 inline double bspline(double t)
 {
@@ -244,52 +287,90 @@ inline double bsplineIntegral(double t)
     return 0.5 + (4 * t - 2 * t * t * t + 0.75 * t * t * t * t) / 6.0;
 }
 
-constexpr double kKernelVariance = 1.0 / 3.0;  // of K, in units of its knot spacing²
-/// Knot spacing of the kernel in cells of the level (support ±2 knots = ±4 cells): wide
-/// enough that the samples' irregular shapes average out (on a plane the scatter of L̂ is
-/// 2.5e-3 with 1 cell and 8e-4 with 2 at the first radius of a level).
+inline double bsplineDerivative(double t)
+{
+    const double a = std::abs(t);
+    if (a >= 2) return 0.0;
+    if (a >= 1) return (t > 0 ? -0.5 : 0.5) * (2 - a) * (2 - a);
+    return -2 * t + 1.5 * t * a;
+}
+
+inline double bsplineSecondDerivative(double t)
+{
+    const double a = std::abs(t);
+    if (a >= 2) return 0.0;
+    if (a >= 1) return 2 - a;
+    return -2 + 3 * a;
+}
+
+/// 4/3 f(t) − 1/6 (f(t + 1) + f(t − 1)): the kernel K from B (or F, K′, K″ from B's).
+template <class Spline>
+inline double fourthOrder(Spline spline, double t)
+{
+    return 4.0 / 3.0 * spline(t) - (spline(t + 1) + spline(t - 1)) / 6.0;
+}
+
+constexpr double kKernelHalfSupport = 3.0;  // K vanishes beyond ±3 knots
+/// Knot spacing of the kernel in cells of the level: wide enough that the samples'
+/// irregular shapes average out.
 constexpr double kKernelCells = 2.0;
 /// On the finest level a sample holds only a few triangle pieces, so its shape is more
-/// irregular: the kernel is wider there (max |ΔL̂| on a plane 2.5e-3 → 8.8e-4).
-inline double kernelCells(int level) { return level == 0 ? 3.0 : kKernelCells; }
+/// irregular: the kernel is wider there.
+inline double kernelCells(int level) { return level == 0 ? 2.5 : kKernelCells; }
 /// Histogram bins per cell. Linear sharing between bin centres blurs d by a tent of
 /// variance bin²/6; few bins keep the weighted sums per radius cheap.
 constexpr int kBinsPerCell = 8;
+/// Histogram channels per bin: a, a·g (shared linearly between bins b and b + 1), a·q and
+/// a·g·q (nearest bin: they carry a small correction).
+constexpr std::size_t kChannels = 4;
 
 /// For @p n samples seen from p (coordinates relative to p): the histogram bins of the
-/// distance d = |x − p|, shared linearly between the two nearest bin centres (bin b gets
-/// 1 − w, b + 1 gets w; b = −1 beyond @p reach2, squared), and the coarea factor
-/// g = sqrt(1 − mean (û·n)²), from the sample's normal tensor t (xx, yy, zz, xy, xz, yz).
-/// Plain loops over floats, compiled for AVX2 as well (chosen at run time; same results).
+/// sample's mean distance d + (tr C − q)/(2d) (d = |x − p| at the centroid, with d at least
+/// @p minDistance in the correction), shared linearly between the two nearest bin centres
+/// (bin b gets 1 − share, b + 1 gets share; b = @p beyond beyond @p reach2, squared; nearest
+/// is the nearest bin centre, or beyond), the coarea
+/// factor g = sqrt(1 − mean (û·n)²) from the sample's normal tensor t, and q = ûᵀCû from
+/// its covariance C (tensors xx, yy, zz, xy, xz, yz). Plain loops over floats, compiled
+/// for AVX2 as well (chosen at run time; same results).
 __attribute__((target_clones("avx2", "default"))) void binSamples(
-    std::size_t n, const float* __restrict x, const float* __restrict y,
-    const float* __restrict z, const float* __restrict txx, const float* __restrict tyy,
-    const float* __restrict tzz, const float* __restrict txy, const float* __restrict txz,
-    const float* __restrict tyz, float px, float py, float pz, float reach2, float invBin,
-    std::int32_t* __restrict bin, float* __restrict w, float* __restrict g)
+    std::size_t n, const float* __restrict x, const float* __restrict y, const float* __restrict z,
+    const float* __restrict txx, const float* __restrict tyy, const float* __restrict tzz,
+    const float* __restrict txy, const float* __restrict txz, const float* __restrict tyz,
+    const float* __restrict cxx, const float* __restrict cyy, const float* __restrict czz,
+    const float* __restrict cxy, const float* __restrict cxz, const float* __restrict cyz, float px,
+    float py, float pz, float reach2, float invBin, float minDistance, std::int32_t beyond, std::int32_t* __restrict bin,
+    std::int32_t* __restrict nearest, float* __restrict share, float* __restrict g, float* __restrict q)
 {
-    for (std::size_t s = 0; s < n; ++s) {
-        const float dx = x[s] - px, dy = y[s] - py, dz = z[s] - pz;
+    for (std::size_t k = 0; k < n; ++k) {
+        const float dx = x[k] - px, dy = y[k] - py, dz = z[k] - pz;
         const float d2 = dx * dx + dy * dy + dz * dz;
-        const float q = dx * dx * txx[s] + dy * dy * tyy[s] + dz * dz * tzz[s] +
-                        2.0f * (dx * dy * txy[s] + dx * dz * txz[s] + dy * dz * tyz[s]);
-        const float t2 = q / (d2 + 1e-30f);  // branch-free, so that the loop vectorises
-        g[s] = std::sqrt(std::max(0.0f, 1.0f - t2));
-        const float u = std::max(0.0f, std::sqrt(d2) * invBin - 0.5f);
+        const float inv2 = 1.0f / (d2 + 1e-30f);  // branch-free, so that the loop vectorises
+        const float tn = dx * dx * txx[k] + dy * dy * tyy[k] + dz * dz * tzz[k] +
+                         2.0f * (dx * dy * txy[k] + dx * dz * txz[k] + dy * dz * tyz[k]);
+        g[k] = std::sqrt(std::max(0.0f, 1.0f - tn * inv2));
+        const float cn = (dx * dx * cxx[k] + dy * dy * cyy[k] + dz * dz * czz[k] +
+                          2.0f * (dx * dy * cxy[k] + dx * dz * cxz[k] + dy * dz * cyz[k])) * inv2;
+        const float d = std::sqrt(d2);
+        q[k] = cn;
+        const float mean = d + 0.5f * (cxx[k] + cyy[k] + czz[k] - cn) / std::max(d, minDistance);
+        const float u = std::max(0.0f, mean * invBin - 0.5f);
         const std::int32_t b = std::int32_t(u);
-        w[s] = u - float(b);
-        bin[s] = d2 < reach2 ? b : -1;
+        share[k] = u - float(b);
+        const bool within = d2 < reach2;
+        nearest[k] = within ? b + (share[k] >= 0.5f ? 1 : 0) : beyond;
+        bin[k] = within ? b : beyond;
     }
 }
 
 /// Samples near a group of points, as floats relative to the group's origin.
 struct Gathered {
     std::vector<float> x, y, z, a;
-    std::array<std::vector<float>, 6> t;
+    std::array<std::vector<float>, 6> t, c;  // normal tensor, covariance
     void clear()
     {
         x.clear(), y.clear(), z.clear(), a.clear();
-        for (auto& c : t) c.clear();
+        for (auto& v : t) v.clear();
+        for (auto& v : c) v.clear();
     }
 };
 
@@ -297,11 +378,11 @@ struct Gathered {
 struct LevelKernel {
     double bin = 0, reach = 0;
     int reachCells = 0, numBins = 0, numRadii = 0;
-    std::vector<double> weightP, weightL;  // [k * numBins + b]
-    /// Per radius, the bins [first, last) where weightL is not zero (the kernel's support).
-    std::vector<std::pair<int, int>> lineBins;
-    /// Per radius, the bins [first, last) where weightP is strictly between 0 and 1: it is
-    /// 1 below first (whole area inside), so P needs a running sum there and no weights.
+    /// [(k · numBins + b) · kChannels + c]: the weight of channel c (a, a·g, a·q, a·g·q) of
+    /// bin b for radius k of the level: P from the channels a and a·q, L from the others.
+    std::vector<float> weights;
+    /// Per radius, the bins [first, last) of the kernel's support, an even number of them.
+    /// Below first, P's weights are those of a whole area, (1, 0): a running sum of areas.
     std::vector<std::pair<int, int>> patchBins;
 };
 
@@ -352,6 +433,11 @@ CellGroups groupByCells(const std::vector<Vec3>& points, double h0, int l)
 }
 
 /// Unnormalised P ∗ K and L ∗ K at @p points for the radii of one level: out[k·n + q].
+/// Each sample stands for its area spread around its centroid with covariance C: a
+/// second-order quadrature, ∫ f(|x − p|) dA ≈ a (f(d) + ½ (f″(d) q + f′(d) s)), with q =
+/// ûᵀCû and s = (tr C − q)/d (the Hessian of f(|x − p|) is f″ ûûᵀ + f′ (I − ûûᵀ)/d). The
+/// f′ term is the shift of the mean distance, d + s/2, where the sample is binned; the f″
+/// term goes into channels of its own.
 /// Points whose @p skip is set are left alone. Points go in groups of 4³ cells that share
 /// one gathered list of nearby samples.
 void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
@@ -373,9 +459,9 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
     if (progress) progress->start("P and L, level " + std::to_string(l), groupStart.size() - 1);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groupStart.size() - 1), [&](const auto& range) {
         Gathered near;
-        std::vector<std::int32_t> bins;
-        std::vector<float> frac, factor;
-        std::vector<float> hist(2 * static_cast<std::size_t>(numBins) + 2);
+        std::vector<std::int32_t> bins, nearest;
+        std::vector<float> share, factor, along;
+        std::vector<float> hist(kChannels * (static_cast<std::size_t>(numBins) + 1));
         for (std::size_t g = range.begin(); g < range.end(); ++g) {
             const std::size_t begin = groupStart[g], end = groupStart[g + 1];
             const CellCoord& c0 = cell[order[begin].second];
@@ -396,40 +482,50 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                 near.y.push_back(float(y));
                 near.z.push_back(float(z));
                 near.a.push_back(level.area[s]);
-                for (std::size_t c = 0; c < 6; ++c) near.t[c].push_back(level.tensor[c][s]);
+                for (std::size_t c = 0; c < 6; ++c) {
+                    near.t[c].push_back(level.tensor[c][s]);
+                    near.c[c].push_back(level.covariance[c][s]);
+                }
             });
             const std::size_t ns = near.x.size();
-            bins.resize(ns), frac.resize(ns), factor.resize(ns);
+            bins.resize(ns), nearest.resize(ns), share.resize(ns), factor.resize(ns), along.resize(ns);
             for (std::size_t q = begin; q < end; ++q) {
                 const std::uint32_t i = order[q].second;
                 if (skip[i]) continue;
-                binSamples(ns, near.x.data(), near.y.data(), near.z.data(), near.t[0].data(),
-                           near.t[1].data(), near.t[2].data(), near.t[3].data(), near.t[4].data(),
-                           near.t[5].data(), float(points[i].x - ox), float(points[i].y - oy),
-                           float(points[i].z - oz), float(kernel.reach * kernel.reach),
-                           float(1.0 / kernel.bin), bins.data(), frac.data(), factor.data());
+                binSamples(ns, near.x.data(), near.y.data(), near.z.data(), near.t[0].data(), near.t[1].data(),
+                           near.t[2].data(), near.t[3].data(), near.t[4].data(), near.t[5].data(),
+                           near.c[0].data(), near.c[1].data(), near.c[2].data(), near.c[3].data(),
+                           near.c[4].data(), near.c[5].data(), float(points[i].x - ox),
+                           float(points[i].y - oy), float(points[i].z - oz), float(reach2),
+                           float(1.0 / kernel.bin), float(0.5 * h), numBins, bins.data(), nearest.data(),
+                           share.data(), factor.data(), along.data());
                 std::fill(hist.begin(), hist.end(), 0.0f);
                 for (std::size_t s = 0; s < ns; ++s) {
-                    if (bins[s] < 0) continue;
-                    float* at = hist.data() + 2 * std::size_t(bins[s]);
-                    const float a = near.a[s], ag = a * factor[s], w = frac[s];
-                    at[0] += a - a * w;    // area, bin b
-                    at[1] += ag - ag * w;  // area·g, bin b
-                    at[2] += a * w;        // bin b + 1
-                    at[3] += ag * w;
+                    if (bins[s] == numBins) continue;  // beyond reach
+                    float* at = hist.data() + kChannels * std::size_t(bins[s]);
+                    const float a = near.a[s], ag = a * factor[s], w = share[s];
+                    at[0] += a - a * w;  // bin b
+                    at[1] += ag - ag * w;
+                    at[kChannels] += a * w;  // bin b + 1
+                    at[kChannels + 1] += ag * w;
+                    float* to = hist.data() + kChannels * std::size_t(nearest[s]);
+                    to[2] += a * along[s];  // nearest bin
+                    to[3] += ag * along[s];
                 }
                 double inside = 0;  // area of the bins below `counted`
                 int counted = 0;
                 for (int k = 0; k < nr; ++k) {
-                    const double* wp = kernel.weightP.data() + std::size_t(k) * numBins;
-                    const double* wl = kernel.weightL.data() + std::size_t(k) * numBins;
                     const auto [firstP, lastP] = kernel.patchBins[std::size_t(k)];
                     if (firstP < counted) inside = 0, counted = 0;  // not expected: radii ascend
-                    for (; counted < firstP; ++counted) inside += double(hist[2 * std::size_t(counted)]);
-                    double sumP = inside, sumL = 0;
-                    for (int b = firstP; b < lastP; ++b) sumP += double(hist[2 * std::size_t(b)]) * wp[b];
-                    const auto [first, last] = kernel.lineBins[std::size_t(k)];
-                    for (int b = first; b < last; ++b) sumL += double(hist[2 * std::size_t(b) + 1]) * wl[b];
+                    for (; counted < firstP; ++counted) inside += double(hist[kChannels * std::size_t(counted)]);
+                    // Bins [firstP, lastP) hold the kernel's support for P and L alike; in
+                    // pairs of bins, 8 lanes: P in the even ones, L in the odd ones.
+                    const float* wk = kernel.weights.data() + std::size_t(k) * kChannels * kernel.numBins;
+                    float lane[8] = {};
+                    for (std::size_t e = kChannels * std::size_t(firstP); e < kChannels * std::size_t(lastP); e += 8)
+                        for (std::size_t u = 0; u < 8; ++u) lane[u] += hist[e + u] * wk[e + u];
+                    const double sumP = inside + double(lane[0] + lane[2]) + double(lane[4] + lane[6]);
+                    const double sumL = double(lane[1] + lane[3]) + double(lane[5] + lane[7]);
                     outP[std::size_t(k) * n + i] = float(sumP);
                     outL[std::size_t(k) * n + i] = float(sumL);
                 }
@@ -440,16 +536,27 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
     if (progress) progress->end();
 }
 
+/// Samples whose normals lie within about 18° of a point's normal on average (mean (n·n_p)²
+/// at least this) are on the same smooth side of the surface: P̂ and L̂ bend across creases,
+/// where a fit over both sides would blur them.
+constexpr double kSameSide = 0.9;
+/// The fit needs at least 6 such samples spread around the point: det M / M₀₀³ of its
+/// normal equations at least this (a full disc of samples gives about 0.2).
+constexpr double kWellSpread = 0.02;
+
 /// Interpolates fields given at the samples of @p level (values[k·numSamples + s], k <
 /// numFields) to the points @p p with normals @p n (out[k·n + i]; points with @p skip set
 /// are left alone): a linear fit in the tangent plane (value and two slopes) over the
-/// samples within 2h, weighted (1 − (d/2h)²)², so linear fields are reproduced; the
-/// weighted mean where the samples do not span the plane. Points go in groups of 4³ cells.
+/// samples within 2h on the point's side of the surface (kSameSide), weighted (1 −
+/// (d/2h)²)², so linear fields are reproduced. Where such samples do not span the plane
+/// (creases, corners), @p unresolved is set instead: those points are evaluated directly.
+/// Points go in groups of 4³ cells.
 void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec3>& p,
                             const std::vector<Vec3>& n, const std::vector<char>& skip,
                             int numFields, const std::vector<const float*>& values,
-                            const std::vector<float*>& out)
+                            const std::vector<float*>& out, std::vector<char>& unresolved)
 {
+    unresolved.assign(p.size(), 0);
     const double h = level.h, radius2 = 4.0 * h * h;
     const CellGroups groups = groupByCells(p, h0, level.index);
     const auto& order = groups.order;
@@ -487,6 +594,10 @@ void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec
                     const Vec3 d(level.cx[s] - p[i].x, level.cy[s] - p[i].y, level.cz[s] - p[i].z);
                     const double q2 = squaredNorm(d) / radius2;
                     if (q2 >= 1.0) continue;
+                    const auto& t = level.tensor;
+                    const double agree = nrm.x * nrm.x * t[0][s] + nrm.y * nrm.y * t[1][s] + nrm.z * nrm.z * t[2][s] +
+                                         2.0 * (nrm.x * nrm.y * t[3][s] + nrm.x * nrm.z * t[4][s] + nrm.y * nrm.z * t[5][s]);
+                    if (agree < kSameSide) continue;
                     const double wt = (1.0 - q2) * (1.0 - q2);
                     const std::array<double, 3> phi{1.0, dot(d, u) / h, dot(d, v) / h};
                     for (int a = 0; a < 3; ++a)
@@ -495,74 +606,27 @@ void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec
                     weight.push_back(wt);
                     basis.push_back(phi);
                 }
-                if (index.empty()) continue;
+                if (index.size() < 6) {
+                    unresolved[i] = 1;
+                    continue;
+                }
                 // First row of m⁻¹ (cofactors): the fitted value is Σ wt·(row·φ)·f.
                 const double c00 = m[1][1] * m[2][2] - m[1][2] * m[2][1];
                 const double c01 = -(m[1][0] * m[2][2] - m[1][2] * m[2][0]);
                 const double c02 = m[1][0] * m[2][1] - m[1][1] * m[2][0];
                 const double det = m[0][0] * c00 + m[0][1] * c01 + m[0][2] * c02;
-                const bool linear = det > 1e-6 * m[0][0] * m[0][0] * m[0][0];
+                if (!(det > kWellSpread * m[0][0] * m[0][0] * m[0][0])) {
+                    unresolved[i] = 1;
+                    continue;
+                }
                 for (std::size_t k = 0; k < index.size(); ++k)
-                    weight[k] *= linear ? (c00 * basis[k][0] + c01 * basis[k][1] + c02 * basis[k][2]) / det
-                                        : 1.0 / m[0][0];
+                    weight[k] *= (c00 * basis[k][0] + c01 * basis[k][1] + c02 * basis[k][2]) / det;
                 for (int f = 0; f < numFields; ++f) {
                     double sum = 0;
                     for (std::size_t k = 0; k < index.size(); ++k)
                         sum += weight[k] * values[std::size_t(f)][index[k]];
                     out[std::size_t(f)][i] = float(sum);
                 }
-            }
-        }
-    });
-}
-
-/// Bias removal across radii (module comment, step 4), per vertex: the estimates are
-/// P ∗ K and L ∗ K, blurred across r with variance σ²_j. For P the blur of πr² (the
-/// cone part, exact for planes, spheres, edges and corners) was divided out per radius;
-/// what remains is removed with a fit P̂ ≈ a + b r + c r² (resp. L̂) over the vertex's
-/// radii: (σ²/2)·(P − cone)'' / (πr²) = σ²(2b/r + 5c) and (σ²/2)·L'' / (2πr) = σ²(b/r + 3c).
-void removeCurvatureBlur(std::vector<std::vector<float>>& values, const std::vector<double>& radii,
-                         const std::vector<double>& variance, const std::vector<char>& fitted,
-                         bool patch)
-{
-    if (values.empty() || radii.size() < 4) return;
-    const std::size_t nv = values.front().size(), nr = radii.size();
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& range) {
-        for (std::size_t i = range.begin(); i < range.end(); ++i) {
-            // Normal equations of the least-squares fit over the radii with a value.
-            double m[3][3] = {}, rhs[3] = {};
-            std::size_t count = 0;
-            for (std::size_t j = 0; j < nr; ++j) {
-                const float v = values[j][i];
-                if (std::isnan(v) || !fitted[j]) continue;
-                const double basis[3] = {1.0, radii[j], radii[j] * radii[j]};
-                for (int u = 0; u < 3; ++u) {
-                    rhs[u] += basis[u] * v;
-                    for (int w = 0; w < 3; ++w) m[u][w] += basis[u] * basis[w];
-                }
-                ++count;
-            }
-            if (count < 4) continue;
-            // Cramer's rule for b and c.
-            const auto det3 = [](const double a[3][3]) {
-                return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
-                       a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
-                       a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
-            };
-            const double det = det3(m);
-            if (!(std::abs(det) > 0)) continue;
-            double mb[3][3], mc[3][3];
-            for (int u = 0; u < 3; ++u)
-                for (int w = 0; w < 3; ++w) {
-                    mb[u][w] = w == 1 ? rhs[u] : m[u][w];
-                    mc[u][w] = w == 2 ? rhs[u] : m[u][w];
-                }
-            const double b = det3(mb) / det, c = det3(mc) / det;
-            for (std::size_t j = 0; j < nr; ++j) {
-                float& v = values[j][i];
-                if (std::isnan(v)) continue;
-                const double r = radii[j];
-                v = float(v - variance[j] * (patch ? 2.0 * b / r + 5.0 * c : b / r + 3.0 * c));
             }
         }
     });
@@ -611,8 +675,6 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
     result.samplingSeconds = stage.seconds();
     stage.restart();
 
-    std::vector<double> variance(radii.size());  // of the blur across r, per radius
-    std::vector<char> fitted(radii.size(), 1);    // full-width kernel: used by the fit
     std::vector<Vec3> vertexNormal;                // for interpolation, when needed
 
     for (int l = 0; l < numLevels; ++l) {
@@ -624,54 +686,62 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         LevelKernel kernel;
         kernel.bin = level.h / kBinsPerCell;
         kernel.numRadii = int(levelRadii.size());
-        // Kernel knot spacing per radius: kKernelCells cells, but at most r/2 so that the
+        // Kernel knot spacing per radius: kernelCells cells, but at most r/3 so that the
         // kernel stays within d >= 0 (small radii on the finest level).
         const double fullWidth = kernelCells(l) * level.h;
         std::vector<double> kw(levelRadii.size());
         for (std::size_t k = 0; k < kw.size(); ++k)
-            kw[k] = std::min(fullWidth, 0.5 * radii[std::size_t(levelRadii[k])]);
-        kernel.reach = radii[std::size_t(levelRadii.back())] + 2.0 * kw.back();
+            kw[k] = std::min(fullWidth, radii[std::size_t(levelRadii[k])] / kKernelHalfSupport);
+        kernel.reach = radii[std::size_t(levelRadii.back())] + kKernelHalfSupport * kw.back();
         kernel.reachCells = int(std::ceil(kernel.reach / level.h)) + 1;
-        kernel.numBins = int(std::ceil(kernel.reach / kernel.bin)) + 2;
+        kernel.numBins = int(std::ceil(kernel.reach / kernel.bin)) + 2;  // bins beyond reach: 0
         // Weights per radius and bin centre d_b = (b + 1/2)·bin (paper Eq. 2 for P and L as
-        // sums over the distance histogram), and the blur across r each gives (kernel and
-        // binning).
-        kernel.weightP.resize(kw.size() * std::size_t(kernel.numBins));
-        kernel.weightL.resize(kernel.weightP.size());
+        // sums over the distance histogram): f(d) = F((r − d)/w) for P, K((d − r)/w)/w for
+        // L (coarea formula), and f″, f′ for the channels q and s (evaluatePoints).
+        kernel.weights.assign(kw.size() * kChannels * std::size_t(kernel.numBins), 0.0f);
+        std::vector<double> binVariance(kw.size(), kernel.bin * kernel.bin / 6.0);
         for (std::size_t k = 0; k < kw.size(); ++k) {
-            const std::size_t j = std::size_t(levelRadii[k]);
-            std::pair<int, int> support{kernel.numBins, 0};
-            int whole = 0, inside = 0;  // weightP is 1 on bins [0, whole), 0 from inside on
+            const double r = radii[std::size_t(levelRadii[k])], w = kw[k];
+            int whole = 0, inside = 0;  // whole areas on bins [0, whole), nothing from inside on
             for (int b = 0; b < kernel.numBins; ++b) {
-                const double d = (b + 0.5) * kernel.bin;
-                const double wp = bsplineIntegral((radii[j] - d) / kw[k]);
-                kernel.weightP[k * kernel.numBins + b] = wp;
-                if (wp == 1.0 && whole == b) whole = b + 1;
-                if (wp > 0) inside = b + 1;
-                const double wl = bspline((d - radii[j]) / kw[k]) / kw[k];
-                kernel.weightL[k * kernel.numBins + b] = wl;
-                if (wl != 0) support = {std::min(support.first, b), b + 1};
+                const double d = (b + 0.5) * kernel.bin, tp = (r - d) / w, tl = (d - r) / w;
+                if (tp >= kKernelHalfSupport) {
+                    if (whole == b) whole = b + 1;
+                    continue;
+                }
+                if (tp <= -kKernelHalfSupport) continue;
+                inside = b + 1;
+                float* at = kernel.weights.data() + (k * kernel.numBins + std::size_t(b)) * kChannels;
+                at[0] = float(fourthOrder(bsplineIntegral, tp));                           // P: f
+                at[1] = float(fourthOrder(bspline, tl) / w);                               // L: f
+                at[2] = float(0.5 * fourthOrder(bsplineDerivative, tp) / (w * w));         // P: f″/2
+                at[3] = float(0.5 * fourthOrder(bsplineSecondDerivative, tl) / (w * w * w));  // L: f″/2
             }
-            kernel.lineBins.push_back(support.first < support.second ? support : std::pair{0, 0});
-            kernel.patchBins.push_back({whole, std::max(whole, inside)});
-            variance[j] = kKernelVariance * kw[k] * kw[k] + kernel.bin * kernel.bin / 6.0;
-            fitted[j] = kw[k] == fullWidth;  // not narrowed for a small radius
+            // An even number of bins: one more with weights 0 if needed (d < reach, so
+            // inside <= numBins − 2).
+            inside = std::max(whole, inside);
+            inside += (inside - whole) % 2;
+            kernel.patchBins.push_back({whole, inside});
         }
 
-        const auto masked = [&](std::size_t i, double r) {
+        // A value is masked when the kernel's reach, plus the spread of a sample, gets to a
+        // border: r + 3w + 2 h0 (V and S: r + 4 h + 2 h0, less or equal).
+        const auto masked = [&](std::size_t i, std::size_t k) {
             return !options.borderDistance.empty() &&
-                   r + 4.0 * level.h + 2.0 * h0 > options.borderDistance[i];
+                   radii[std::size_t(levelRadii[k])] + std::max(kKernelHalfSupport * kw[k], 4.0 * level.h) + 2.0 * h0 >
+                       options.borderDistance[i];
         };
         const auto store = [&](std::size_t i, std::size_t k, double sumP, double sumL) {
             const std::size_t j = std::size_t(levelRadii[k]);
             const double r = radii[j];
-            if (masked(i, r)) return;
-            // P ∗ K of P = π r² is π (r² + σ²): divided out here (the cone part).
-            if (options.computePatch) result.patch[j][i] = float(sumP / (M_PI * (r * r + variance[j])));
+            if (masked(i, k)) return;
+            // K has no second moment, but the binning adds a tent of variance bin²/6 to the
+            // blur across r: P = π r² gives π (r² + bin²/6), divided out.
+            if (options.computePatch) result.patch[j][i] = float(sumP / (M_PI * (r * r + binVariance[k])));
             if (options.computeLine) result.line[j][i] = float(sumL / (2.0 * M_PI * r));
         };
         std::vector<char> skip(nv);  // every radius of the level is masked
-        for (std::size_t i = 0; i < nv; ++i) skip[i] = masked(i, radii[std::size_t(levelRadii.front())]);
+        for (std::size_t i = 0; i < nv; ++i) skip[i] = masked(i, 0);
         std::vector<float> sumP, sumL;
         const std::size_t numSamples = level.cx.size();
         if (numSamples >= nv) {
@@ -701,17 +771,30 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
                 to.push_back(atP.data() + std::size_t(k) * nv);
                 to.push_back(atL.data() + std::size_t(k) * nv);
             }
-            interpolateFromSamples(level, h0, mesh.points, vertexNormal, skip, 2 * nr, from, to);
+            std::vector<char> unresolved;
+            interpolateFromSamples(level, h0, mesh.points, vertexNormal, skip, 2 * nr, from, to, unresolved);
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& range) {
                 for (std::size_t i = range.begin(); i < range.end(); ++i)
-                    if (!skip[i])
+                    if (!skip[i] && !unresolved[i])
                         for (std::size_t k = 0; k < levelRadii.size(); ++k)
                             store(i, k, atP[k * nv + i], atL[k * nv + i]);
             });
+            // Vertices on creases and corners: evaluated where they are.
+            std::vector<std::uint32_t> direct;
+            for (std::size_t i = 0; i < nv; ++i)
+                if (unresolved[i] && !skip[i]) direct.push_back(std::uint32_t(i));
+            result.directEvaluations += direct.size();
+            if (!direct.empty()) {
+                std::vector<Vec3> points(direct.size());
+                for (std::size_t q = 0; q < direct.size(); ++q) points[q] = mesh.points[direct[q]];
+                evaluatePoints(level, kernel, h0, points, std::vector<char>(direct.size(), 0), sumP, sumL, nullptr);
+                const std::size_t nd = direct.size();
+                for (std::size_t q = 0; q < nd; ++q)
+                    for (std::size_t k = 0; k < levelRadii.size(); ++k)
+                        store(direct[q], k, sumP[k * nd + q], sumL[k * nd + q]);
+            }
         }
     }
-    removeCurvatureBlur(result.patch, radii, variance, fitted, true);
-    removeCurvatureBlur(result.line, radii, variance, fitted, false);
     result.gatherSeconds = stage.seconds();
     return result;
 }

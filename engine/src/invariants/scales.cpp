@@ -38,4 +38,13 @@ std::vector<int> gridLevelOfRadius(const std::vector<double>& radii, double h0,
     return levels;
 }
 
+double dependenceReach(const std::vector<double>& radii, double h0, double minCellsPerRadius)
+{
+    const std::vector<int> levels = gridLevelOfRadius(radii, h0, minCellsPerRadius);
+    double reach = 0;
+    for (std::size_t j = 0; j < radii.size(); ++j)
+        reach = std::max(reach, radii[j] + std::max(radii[j], 4.0 * h0 * double(1 << levels[j])) + 2.0 * h0);
+    return reach;
+}
+
 } // namespace msii

@@ -164,9 +164,9 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
     ComputeResult plan = prepareComputation(mesh, options);
     const std::vector<double> radii = equidistantRadii(options.radius, options.scales);
     const std::vector<int> levels = gridLevelOfRadius(radii, plan.voxelSize, options.minVoxelsPerRadius);
-    const double h0 = plan.voxelSize, hCoarse = h0 * double(1 << *std::max_element(levels.begin(), levels.end()));
-    // Border distances are searched up to 2R; balls with their margin reach R + 4 h_L + 2 h_0.
-    const double halo = std::max(2.0 * options.radius, options.radius + 4.0 * hCoarse + 2.0 * h0) + 2.0 * h0;
+    const double h0 = plan.voxelSize;
+    // Border distances are searched up to the values' reach + 2 h_0 (computeInvariants).
+    const double halo = dependenceReach(radii, h0, options.minVoxelsPerRadius) + 4.0 * h0;
 
     // Memory: the mesh (points, triangles), the tiles' vertex and triangle lists (halos make
     // the latter about 1.2-1.5 times the triangles) and local indices stay whole, and with

@@ -5,18 +5,23 @@
 ///
 /// How (details in patch_line.cpp):
 /// 1. Samples: the triangles are cut into pieces no larger than the finest cell h0, and the
-///    pieces are gathered per cell into one sample: area, centroid, vector area (normal) and
-///    second moment. Coarser levels (cells 2h0, 4h0, ...) merge 2×2×2 cells exactly.
+///    pieces are gathered per cell into one sample: area, centroid, covariance of position
+///    and mean normal tensor. Coarser levels (cells 2h0, 4h0, ...) merge 2×2×2 cells exactly.
 /// 2. Each radius uses the level of the V/S plan (gridLevelOfRadius: r/h >= minCellsPerRadius).
-/// 3. Per vertex p and level, one pass over the samples within reach builds histograms over
+/// 3. Per point p and level, one pass over the samples within reach builds histograms over
 ///    the distance d = |x − p| of area, and of area·g with g = |∇_M d| = sqrt(1 − (û·n)²)
-///    (û = (x − p)/d). Then P(r) = Σ a·F((r − d)/h) and, by the coarea formula
-///    L = ∫_M δ(|x − p| − r)·|∇_M |x − p|| dA, L(r) = Σ a·g·K((d − r)/h)/h, with K the cubic
-///    B-spline (support ±2h) and F its integral: smooth in d, so where a sample sits in its
-///    cell hardly matters, and all radii of a level share the pass.
-/// 4. The estimator is P and L blurred across r (kernel, bins, sample extent); the bias this
-///    gives is removed in closed form for P ∝ r² and L ∝ r (planes, spheres' P, edges,
-///    corners).
+///    (û = (x − p)/d). Then P(r) = Σ a·F((r − d)/w) and, by the coarea formula
+///    L = ∫_M δ(|x − p| − r)·|∇_M |x − p|| dA, L(r) = Σ a·g·K((d − r)/w)/w (paper Eq. 2),
+///    with K a kernel of knot spacing w (2 cells; 2.5 on the finest level) and F its
+///    integral, and all radii of a level share the pass.
+/// 4. K = 4/3 B(t) − 1/6 (B(t + 1) + B(t − 1)), B the cubic B-spline: ∫K = 1, zero second
+///    moment, C², support ±3w. So the blur across r leaves any locally quadratic P(r) and
+///    L(r) unchanged (planes, spheres, cones of edges and corners) without a correction.
+/// 5. Each sample stands for its area spread with its covariance: a second-order quadrature
+///    (the mean distance d + (tr C − ûᵀCû)/(2d), and f″/2·ûᵀCû in channels of their own).
+/// 6. Coarse levels with fewer samples than vertices evaluate at the samples and fit a plane
+///    to the vertices from the samples on the vertex's side of the surface; vertices on
+///    creases and corners, where that fails, are evaluated where they are.
 
 #include <msii/core/progress.h>
 #include <msii/mesh/trimesh.h>
@@ -34,8 +39,9 @@ struct PatchLineOptions {
     bool computePatch = true;        ///< P
     bool computeLine = true;         ///< L
     /// Per-vertex distance to the nearest border (mesh/border_distance.h); empty = closed.
-    /// Radius r_j of vertex i is masked (NaN) when r_j + 4 h_level + 2 h_0 > borderDistance[i],
-    /// the same rule as for V and S.
+    /// Radius r_j of vertex i is masked (NaN) when r_j + max(3 w_j, 4 h_level) + 2 h_0 >
+    /// borderDistance[i] (w_j the kernel's knot spacing, at most r_j/3): the reach of the
+    /// kernel, at least V and S's margin (so P and L are masked wherever V and S are).
     std::vector<double> borderDistance;
 };
 
@@ -45,6 +51,9 @@ struct PatchLineResult {
     std::vector<std::vector<float>> line;     ///< [j][vertex]: L/(2π r) (plane 1), NaN = masked
     std::vector<int> levelOfRadius;           ///< sample level of each radius (cell h0·2^level)
     std::size_t numSamples = 0;               ///< samples on the finest level
+    /// Vertices evaluated where they are on a coarse level instead of interpolated from the
+    /// samples (creases, corners), summed over the levels.
+    std::size_t directEvaluations = 0;
     double samplingSeconds = 0, gatherSeconds = 0;
 };
 

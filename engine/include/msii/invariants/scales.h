@@ -20,4 +20,10 @@ void validateRadii(const std::vector<double>& radii);
 std::vector<int> gridLevelOfRadius(const std::vector<double>& radii, double h0,
                                    double minCellsPerRadius);
 
+/// How far from a vertex its values may depend on the mesh, at most: max over the radii of
+/// r + max(r, 4 h_l) + 2 h0, where V and S's stencils reach r + 4 h_l + 2 h0 and P and L's
+/// kernel r + 3w + 2 h0 with w <= r/3 (patch_line.h). A value is masked when this reaches a
+/// border, so border distances are searched a little beyond it, and tiles' halos too.
+double dependenceReach(const std::vector<double>& radii, double h0, double minCellsPerRadius);
+
 } // namespace msii
