@@ -37,6 +37,8 @@ ComputeResult prepareComputation(TriMesh& mesh, const ComputeOptions& options)
         throw InvalidInputError("the voxel size must be positive (or 0 for automatic)");
     if (!(options.minVoxelsPerRadius >= 1) || options.minVoxelsPerRadius > 64)
         throw InvalidInputError("the precision must be between 1 and 64 voxels per radius");
+    if (options.patchLinePrecision != 0 && !(options.patchLinePrecision >= 1 && options.patchLinePrecision <= 64))
+        throw InvalidInputError("the P and L precision must be between 1 and 64 cells per radius (or 0: as V and S)");
     if (mesh.numVertices() == 0) throw InvalidInputError("the mesh has no vertices");
     if (mesh.numTriangles() == 0) throw InvalidInputError("the mesh has no faces");
 
@@ -105,6 +107,16 @@ ComputeResult prepareComputation(TriMesh& mesh, const ComputeOptions& options)
     return result;
 }
 
+double patchLinePrecision(const ComputeOptions& options)
+{
+    return options.patchLinePrecision > 0 ? options.patchLinePrecision : options.minVoxelsPerRadius;
+}
+
+double coarsestPrecision(const ComputeOptions& options)
+{
+    return std::min(options.minVoxelsPerRadius, patchLinePrecision(options));
+}
+
 ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Progress* progress)
 {
     const Stopwatch total;
@@ -118,7 +130,7 @@ ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Pr
     std::vector<double> border;
     if (!result.check.closed)
         border = borderDistance(mesh, result.check.borderEdges,
-                                dependenceReach(radii, result.voxelSize, options.minVoxelsPerRadius) +
+                                dependenceReach(radii, result.voxelSize, coarsestPrecision(options)) +
                                     2.0 * result.voxelSize);
     const float nan = std::numeric_limits<float>::quiet_NaN();
 
@@ -187,7 +199,7 @@ ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Pr
         PatchLineOptions plOptions;
         plOptions.radii = radii;
         plOptions.cellSize = result.voxelSize;
-        plOptions.minCellsPerRadius = options.minVoxelsPerRadius;
+        plOptions.minCellsPerRadius = patchLinePrecision(options);
         plOptions.computePatch = options.computePatch;
         plOptions.computeLine = options.computeLine;
         plOptions.borderDistance = border;

@@ -166,7 +166,7 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
     const std::vector<int> levels = gridLevelOfRadius(radii, plan.voxelSize, options.minVoxelsPerRadius);
     const double h0 = plan.voxelSize;
     // Border distances are searched up to the values' reach + 2 h_0 (computeInvariants).
-    const double halo = dependenceReach(radii, h0, options.minVoxelsPerRadius) + 4.0 * h0;
+    const double halo = dependenceReach(radii, h0, coarsestPrecision(options)) + 4.0 * h0;
 
     // Memory: the mesh (points, triangles), the tiles' vertex and triangle lists (halos make
     // the latter about 1.2-1.5 times the triangles) and local indices stay whole, and with
@@ -216,7 +216,8 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
 
     ComputeResult result = plan;
     result.invariants.radii = result.patchLine.radii = radii;
-    result.invariants.levelOfRadius = result.patchLine.levelOfRadius = levels;
+    result.invariants.levelOfRadius = levels;
+    result.patchLine.levelOfRadius = gridLevelOfRadius(radii, plan.voxelSize, patchLinePrecision(options));
     result.invariants.numLevels = *std::max_element(levels.begin(), levels.end()) + 1;
 
     // Each tile's own vertices and the triangles of its grown box, sorted out in one pass each.

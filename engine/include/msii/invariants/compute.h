@@ -24,6 +24,9 @@ struct ComputeOptions {
     double voxelSize = 0;
     /// Precision knob: each radius is evaluated on the coarsest grid where r/h >= this.
     double minVoxelsPerRadius = 6.0;
+    /// The same for P and L (their sample cells); 0 = minVoxelsPerRadius. Twice the default
+    /// halves their kernel blur at about 1.7 times their time (README, limits).
+    double patchLinePrecision = 0;
     /// Which invariants (paper Eq. 2). V and S share the level set and one stencil pass;
     /// P and L share one pass over the surface samples.
     bool computeVolume = true, computeSphere = true, computePatch = true, computeLine = true;
@@ -54,6 +57,12 @@ struct ComputeResult {
     ComputeTimings timings;
     std::vector<std::string> warnings; ///< things the user should know (one sentence each)
 };
+
+/// Cells per radius of P and L: patchLinePrecision, or minVoxelsPerRadius if that is 0.
+double patchLinePrecision(const ComputeOptions& options);
+/// The smaller of the two precisions: the coarsest grid levels, which reach farthest
+/// (dependenceReach of invariants/scales.h).
+double coarsestPrecision(const ComputeOptions& options);
 
 /// The automatic voxel size: fine enough that the first radius of at least 3 median edge
 /// lengths has r/h >= minVoxelsPerRadius, but not finer than half the median edge (the mesh
