@@ -600,7 +600,7 @@ std::function<int()> addComputeCommand(CLI::App& app)
                     "higher = more exact and slower)");
     cmd->add_option("--pl-precision", args->plPrecision,
                     "The same for P and L alone (default: as --precision; 12 halves their kernel blur "
-                    "at about 1.7 times their time)");
+                    "at about twice their time)");
     cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
     cmd->add_flag("-q,--quiet", args->quiet, "No progress, no summary; errors only");
     cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs");

@@ -210,8 +210,17 @@ std::vector<SampleSums> finestSamples(const TriMesh& mesh, double h0)
             }
         }
     });
+    // Joined with each part freed as it goes, and the pieces freed first: the samples are
+    // the largest allocation of P and L, so they are held about once, not twice.
+    std::vector<Piece>().swap(pieces);
+    std::size_t total = 0;
+    for (const auto& part : parts) total += part.size();
     std::vector<SampleSums> samples;
-    for (auto& part : parts) samples.insert(samples.end(), part.begin(), part.end());
+    samples.reserve(total);
+    for (auto& part : parts) {
+        samples.insert(samples.end(), part.begin(), part.end());
+        std::vector<SampleSums>().swap(part);
+    }
     return samples;
 }
 
@@ -354,8 +363,10 @@ __attribute__((target_clones("avx2", "default"))) void binSamples(
         const float d = std::sqrt(d2);
         q[k] = cn;
         const float mean = d + 0.5f * (cxx[k] + cyy[k] + czz[k] - cn) / std::max(d, minDistance);
-        const float u = std::max(0.0f, mean * invBin - 0.5f);
-        const std::int32_t b = std::int32_t(u);
+        // The mean may lie up to 3/4 cell beyond d (a cell's covariance has trace <= 3h²/4,
+        // and d is taken at least h/2): such a sample stays in the last bin with a neighbour.
+        const float u = std::min(std::max(0.0f, mean * invBin - 0.5f), float(beyond - 1));
+        const std::int32_t b = std::min(std::int32_t(u), beyond - 2);
         share[k] = u - float(b);
         const bool within = d2 < reach2;
         nearest[k] = within ? b + (share[k] >= 0.5f ? 1 : 0) : beyond;

@@ -25,7 +25,7 @@ struct ComputeOptions {
     /// Precision knob: each radius is evaluated on the coarsest grid where r/h >= this.
     double minVoxelsPerRadius = 6.0;
     /// The same for P and L (their sample cells); 0 = minVoxelsPerRadius. Twice the default
-    /// halves their kernel blur at about 1.7 times their time (README, limits).
+    /// halves their kernel blur at about twice their time (README, limits).
     double patchLinePrecision = 0;
     /// Which invariants (paper Eq. 2). V and S share the level set and one stencil pass;
     /// P and L share one pass over the surface samples.
