@@ -173,13 +173,16 @@ TEST(PatchLine, TabletAgainstExactMode)
     const ComputeResult fast = computeInvariants(mesh, co);
     const auto& check = fast.check;
     const std::vector<double> border = borderDistance(mesh, check.borderEdges, 4 * co.radius);
+    // Away from the border: beyond P and L's mask at R, R + max(3w, 4h) + 2h0 with w <= 2h
+    // on the coarsest level h.
+    const double coarsest = fast.voxelSize * double(1 << (fast.invariants.numLevels - 1));
+    const double unmasked = co.radius + 6 * coarsest + 2 * fast.voxelSize;
     std::mt19937 rng(7);
     ExactOptions eo;
     eo.radii = fast.invariants.radii;
     while (eo.vertices.size() < 200) {
         const std::uint32_t v = std::uint32_t(rng() % mesh.numVertices());
-        if (border[v] > dependenceReach(fast.invariants.radii, fast.voxelSize, co.minVoxelsPerRadius))
-            eo.vertices.push_back(v);
+        if (border[v] > unmasked) eo.vertices.push_back(v);
     }
     const ExactResult exact = computeExact(mesh, eo);
     const std::vector<const std::vector<std::vector<float>>*> fastColumns{
@@ -248,7 +251,7 @@ TEST(PatchLine, TabletPatchAtTwelveCellsPerRadius)
     eo.computeVolumeSphere = false;
     while (eo.vertices.size() < 200) {
         const std::uint32_t v = std::uint32_t(rng() % mesh.numVertices());
-        if (border[v] > dependenceReach(eo.radii, fast.voxelSize, co.minVoxelsPerRadius)) eo.vertices.push_back(v);
+        if (border[v] > co.radius + 6 * fast.voxelSize * 8 + 2 * fast.voxelSize) eo.vertices.push_back(v);
     }
     const ExactResult exact = computeExact(mesh, eo);
     double worstMean[2] = {}, worstMax[2] = {};

@@ -79,6 +79,34 @@ TEST(TiledCompute, OpenTabletEqualsUntiled)
     }
 }
 
+// A dense mesh (more vertices than samples on the coarse levels), so that P and L are
+// evaluated at the samples and fitted to the vertices there: the longest chain of
+// dependence (dependenceReach), which the halo must cover for identical values.
+TEST(TiledCompute, DenseTabletEqualsUntiledBitForBit)
+{
+    samples::HeightFieldOptions ho;
+    ho.kind = samples::HeightFieldKind::Tablet;
+    ho.width = 7;
+    ho.height = 6;
+    ho.spacing = 0.03;
+    ho.seed = 4;
+    TriMesh mesh = samples::makeHeightField(ho);
+    ComputeOptions co;
+    co.radius = 1.0;
+    TriMesh whole = mesh;
+    const ComputeResult untiled = computeInvariants(whole, co);
+    TilingOptions to;
+    to.tilesPerAxis = 2;
+    TiledComputeInfo info;
+    const ComputeResult tiled = computeTiled(mesh, co, to, &info);
+    std::size_t nanMismatches = 0;
+    const double diff = maxDifference(untiled, tiled, nanMismatches);
+    std::printf("dense tablet %zu vertices, 2 x 2 tiles (halo %.3f): max difference %.3g, NaN mismatches %zu\n",
+                mesh.numVertices(), info.haloWidth, diff, nanMismatches);
+    EXPECT_EQ(diff, 0.0);
+    EXPECT_EQ(nanMismatches, 0u);
+}
+
 TEST(TiledCompute, ClosedSphereEqualsUntiled)
 {
     samples::SphereOptions so;
