@@ -74,6 +74,76 @@ Errors compare(const ComputeResult& res, const std::function<double(double)>& ex
     return e;
 }
 
+/// The generated tablet with wedge impressions of the fast-against-exact tests (62k
+/// vertices; R = 2.4 is about 30 median edges).
+TriMesh exactTestTablet()
+{
+    samples::HeightFieldOptions ho;
+    ho.kind = samples::HeightFieldKind::Tablet;
+    ho.width = 20;
+    ho.height = 15;
+    ho.spacing = 0.07;
+    ho.seed = 5;
+    return samples::makeHeightField(ho);
+}
+
+/// 200 random vertices (seed 7) away from the border: beyond P and L's mask at R,
+/// R + max(3w, 4h) + 2h0 with w <= 2h on the coarsest level h of V and S.
+std::vector<std::uint32_t> centralVertices(const TriMesh& mesh, const ComputeResult& fast, const ComputeOptions& co)
+{
+    const std::vector<double> border = borderDistance(mesh, fast.check.borderEdges, 4 * co.radius);
+    const auto levels = gridLevelOfRadius(equidistantRadii(co.radius, co.scales), fast.voxelSize, co.minVoxelsPerRadius);
+    const double coarsest = fast.voxelSize * double(1 << levels.back());
+    const double unmasked = co.radius + 6 * coarsest + 2 * fast.voxelSize;
+    std::mt19937 rng(7);
+    std::vector<std::uint32_t> vertices;
+    while (vertices.size() < 200) {
+        const std::uint32_t v = std::uint32_t(rng() % mesh.numVertices());
+        if (border[v] > unmasked) vertices.push_back(v);
+    }
+    return vertices;
+}
+
+/// Per column, the worst over radii >= 3 median edges of the mean and the max of |fast −
+/// exact| at the exact mode's vertices; NaN differences are counted. With @p print, the
+/// per-radius table (mean, max per column) goes to the log.
+struct AgainstExact {
+    std::vector<double> worstMean, worstMax;
+    std::size_t checked = 0, nans = 0;
+};
+
+AgainstExact compareWithExact(const std::vector<const std::vector<std::vector<float>>*>& fastColumns,
+                              const std::vector<const std::vector<std::vector<double>>*>& exactColumns,
+                              const ExactResult& exact, double minRadius, bool print)
+{
+    AgainstExact a;
+    a.worstMean.assign(fastColumns.size(), 0.0);
+    a.worstMax.assign(fastColumns.size(), 0.0);
+    const std::size_t nk = exact.vertices.size();
+    for (std::size_t j = 0; j < exact.radii.size(); ++j) {
+        if (exact.radii[j] < minRadius) continue;
+        if (print) std::printf("  %6.3f ", exact.radii[j]);
+        for (std::size_t q = 0; q < fastColumns.size(); ++q) {
+            double sum = 0, mx = 0;
+            for (std::size_t k = 0; k < nk; ++k) {
+                const double d = std::abs((*fastColumns[q])[j][exact.vertices[k]] - (*exactColumns[q])[j][k]);
+                if (std::isnan(d)) {
+                    ++a.nans;
+                    continue;
+                }
+                sum += d;
+                mx = std::max(mx, d);
+            }
+            if (print) std::printf("  %.1e  %.1e", sum / nk, mx);
+            a.worstMean[q] = std::max(a.worstMean[q], sum / nk);
+            a.worstMax[q] = std::max(a.worstMax[q], mx);
+        }
+        if (print) std::printf("\n");
+        ++a.checked;
+    }
+    return a;
+}
+
 } // namespace
 
 TEST(PatchLine, FlatPlaneIsOne)
@@ -160,59 +230,25 @@ TEST(PatchLine, CubeCornerAndEdge)
 // median edges, 200 random vertices away from the border): the per-radius table is printed.
 TEST(PatchLine, TabletAgainstExactMode)
 {
-    samples::HeightFieldOptions ho;
-    ho.kind = samples::HeightFieldKind::Tablet;
-    ho.width = 20;
-    ho.height = 15;
-    ho.spacing = 0.07;
-    ho.seed = 5;
-    TriMesh mesh = samples::makeHeightField(ho);
+    TriMesh mesh = exactTestTablet();
     ASSERT_GE(mesh.numVertices(), 50000u);
     ComputeOptions co;
     co.radius = 2.4;  // ≈ 30 median edges
     const ComputeResult fast = computeInvariants(mesh, co);
-    const auto& check = fast.check;
-    const std::vector<double> border = borderDistance(mesh, check.borderEdges, 4 * co.radius);
-    // Away from the border: beyond P and L's mask at R, R + max(3w, 4h) + 2h0 with w <= 2h
-    // on the coarsest level h.
-    const double coarsest = fast.voxelSize * double(1 << (fast.invariants.numLevels - 1));
-    const double unmasked = co.radius + 6 * coarsest + 2 * fast.voxelSize;
-    std::mt19937 rng(7);
     ExactOptions eo;
     eo.radii = fast.invariants.radii;
-    while (eo.vertices.size() < 200) {
-        const std::uint32_t v = std::uint32_t(rng() % mesh.numVertices());
-        if (border[v] > unmasked) eo.vertices.push_back(v);
-    }
+    eo.vertices = centralVertices(mesh, fast, co);
     const ExactResult exact = computeExact(mesh, eo);
-    const std::vector<const std::vector<std::vector<float>>*> fastColumns{
-        &fast.invariants.volume, &fast.invariants.sphere, &fast.patchLine.patch, &fast.patchLine.line};
-    const std::vector<const std::vector<std::vector<double>>*> exactColumns{
-        &exact.volume, &exact.sphere, &exact.patch, &exact.line};
     std::printf("fast vs exact, tablet %zu vertices, R %.2f, 200 vertices\n"
                 "   r      mean|dV| max|dV|  mean|dS| max|dS|  mean|dP| max|dP|  mean|dL| max|dL|\n",
                 mesh.numVertices(), co.radius);
-    double worstMean[4] = {}, worstMax[4] = {};
-    std::size_t checked = 0;
-    for (std::size_t j = 0; j < eo.radii.size(); ++j) {
-        if (eo.radii[j] < 3 * fast.stats.medianEdge) continue;
-        std::printf("  %6.3f ", eo.radii[j]);
-        for (int q = 0; q < 4; ++q) {
-            double sum = 0, mx = 0;
-            for (std::size_t k = 0; k < eo.vertices.size(); ++k) {
-                const double d = std::abs((*fastColumns[q])[j][eo.vertices[k]] - (*exactColumns[q])[j][k]);
-                ASSERT_FALSE(std::isnan(d)) << "vertex " << eo.vertices[k] << " radius " << j;
-                sum += d;
-                mx = std::max(mx, d);
-            }
-            std::printf("  %.1e  %.1e", sum / eo.vertices.size(), mx);
-            worstMean[q] = std::max(worstMean[q], sum / eo.vertices.size());
-            worstMax[q] = std::max(worstMax[q], mx);
-        }
-        std::printf("\n");
-        ++checked;
-    }
-    ASSERT_GE(checked, 14u);
+    const AgainstExact e = compareWithExact(
+        {&fast.invariants.volume, &fast.invariants.sphere, &fast.patchLine.patch, &fast.patchLine.line},
+        {&exact.volume, &exact.sphere, &exact.patch, &exact.line}, exact, 3 * fast.stats.medianEdge, true);
+    ASSERT_EQ(e.nans, 0u);
+    const auto& worstMean = e.worstMean;
+    const auto& worstMax = e.worstMax;
+    ASSERT_GE(e.checked, 14u);
     // V and S meet the bounds (mean 1e-3, max 1e-2): measured worst means 3.8e-4
     // and 7.0e-4, maxima 4.5e-3 and 6.8e-3.
     EXPECT_LE(worstMean[0], 1e-3);
@@ -234,46 +270,23 @@ TEST(PatchLine, TabletAgainstExactMode)
 // values are at the first radii, on the finest level, which this does not refine.
 TEST(PatchLine, TabletPatchAtTwelveCellsPerRadius)
 {
-    samples::HeightFieldOptions ho;
-    ho.kind = samples::HeightFieldKind::Tablet;
-    ho.width = 20;
-    ho.height = 15;
-    ho.spacing = 0.07;
-    ho.seed = 5;
-    TriMesh mesh = samples::makeHeightField(ho);
+    TriMesh mesh = exactTestTablet();
     ComputeOptions co = patchLineOnly(2.4);
     co.patchLinePrecision = 12;
     const ComputeResult fast = computeInvariants(mesh, co);
-    const std::vector<double> border = borderDistance(mesh, fast.check.borderEdges, 4 * co.radius);
-    std::mt19937 rng(7);
+    for (std::size_t j = 0; j < fast.patchLine.radii.size(); ++j)
+        EXPECT_EQ(fast.patchLine.levelOfRadius[j], gridLevelOfRadius({fast.patchLine.radii[j]}, fast.voxelSize, 12).front());
     ExactOptions eo;
     eo.radii = fast.patchLine.radii;
     eo.computeVolumeSphere = false;
-    while (eo.vertices.size() < 200) {
-        const std::uint32_t v = std::uint32_t(rng() % mesh.numVertices());
-        if (border[v] > co.radius + 6 * fast.voxelSize * 8 + 2 * fast.voxelSize) eo.vertices.push_back(v);
-    }
+    eo.vertices = centralVertices(mesh, fast, co);
     const ExactResult exact = computeExact(mesh, eo);
-    double worstMean[2] = {}, worstMax[2] = {};
-    std::size_t checked = 0;
-    for (std::size_t j = 0; j < eo.radii.size(); ++j) {
-        if (eo.radii[j] < 3 * fast.stats.medianEdge) continue;
-        EXPECT_EQ(fast.patchLine.levelOfRadius[j], gridLevelOfRadius({eo.radii[j]}, fast.voxelSize, 12).front());
-        for (int q = 0; q < 2; ++q) {
-            const auto& f = q == 0 ? fast.patchLine.patch[j] : fast.patchLine.line[j];
-            const auto& e = q == 0 ? exact.patch[j] : exact.line[j];
-            double sum = 0, mx = 0;
-            for (std::size_t k = 0; k < eo.vertices.size(); ++k) {
-                const double d = std::abs(f[eo.vertices[k]] - e[k]);
-                ASSERT_FALSE(std::isnan(d));
-                sum += d;
-                mx = std::max(mx, d);
-            }
-            worstMean[q] = std::max(worstMean[q], sum / eo.vertices.size());
-            worstMax[q] = std::max(worstMax[q], mx);
-        }
-        ++checked;
-    }
+    const AgainstExact e = compareWithExact({&fast.patchLine.patch, &fast.patchLine.line},
+                                            {&exact.patch, &exact.line}, exact, 3 * fast.stats.medianEdge, false);
+    ASSERT_EQ(e.nans, 0u);
+    const auto& worstMean = e.worstMean;
+    const auto& worstMax = e.worstMax;
+    const std::size_t checked = e.checked;
     std::printf("precision 12 for P and L: worst mean |dP| %.1e, max %.1e; |dL| %.1e, max %.1e\n",
                 worstMean[0], worstMax[0], worstMean[1], worstMax[1]);
     ASSERT_GE(checked, 14u);

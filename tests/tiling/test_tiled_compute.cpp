@@ -38,6 +38,26 @@ double maxDifference(const ComputeResult& a, const ComputeResult& b, std::size_t
     return worst;
 }
 
+/// The same mesh computed whole and in n × n tiles, and how far they differ.
+struct TiledAgainstWhole {
+    ComputeResult tiled;
+    TiledComputeInfo info;
+    double diff = 0;
+    std::size_t nanMismatches = 0;
+};
+
+TiledAgainstWhole tiledAgainstWhole(const TriMesh& mesh, const ComputeOptions& co, int n)
+{
+    TriMesh whole = mesh, copy = mesh;
+    const ComputeResult untiled = computeInvariants(whole, co);
+    TilingOptions to;
+    to.tilesPerAxis = n;
+    TiledAgainstWhole t;
+    t.tiled = computeTiled(copy, co, to, &t.info);
+    t.diff = maxDifference(untiled, t.tiled, t.nanMismatches);
+    return t;
+}
+
 TriMesh tablet()
 {
     samples::HeightFieldOptions ho;
@@ -90,19 +110,14 @@ TEST(TiledCompute, DenseTabletEqualsUntiledBitForBit)
     ho.height = 6;
     ho.spacing = 0.03;
     ho.seed = 4;
-    TriMesh mesh = samples::makeHeightField(ho);
+    const TriMesh mesh = samples::makeHeightField(ho);
     ComputeOptions co;
     co.radius = 1.0;
-    TriMesh whole = mesh;
-    const ComputeResult untiled = computeInvariants(whole, co);
-    TilingOptions to;
-    to.tilesPerAxis = 2;
-    TiledComputeInfo info;
-    const ComputeResult tiled = computeTiled(mesh, co, to, &info);
-    std::size_t nanMismatches = 0;
-    const double diff = maxDifference(untiled, tiled, nanMismatches);
+    const TiledAgainstWhole t = tiledAgainstWhole(mesh, co, 2);
     std::printf("dense tablet %zu vertices, 2 x 2 tiles (halo %.3f): max difference %.3g, NaN mismatches %zu\n",
-                mesh.numVertices(), info.haloWidth, diff, nanMismatches);
+                mesh.numVertices(), t.info.haloWidth, t.diff, t.nanMismatches);
+    const double diff = t.diff;
+    const std::size_t nanMismatches = t.nanMismatches;
     EXPECT_EQ(diff, 0.0);
     EXPECT_EQ(nanMismatches, 0u);
 }
@@ -112,17 +127,13 @@ TEST(TiledCompute, ClosedSphereEqualsUntiled)
     samples::SphereOptions so;
     so.radius = 4;
     so.spacing = 0.15;
-    TriMesh mesh = samples::makeSphere(so);
+    const TriMesh mesh = samples::makeSphere(so);
     ComputeOptions co;
     co.radius = 1.0;
-    TriMesh whole = mesh;
-    const ComputeResult untiled = computeInvariants(whole, co);
-    TilingOptions to;
-    to.tilesPerAxis = 2;
-    TriMesh copy = mesh;
-    const ComputeResult tiled = computeTiled(copy, co, to);
-    std::size_t nanMismatches = 0;
-    const double diff = maxDifference(untiled, tiled, nanMismatches);
+    const TiledAgainstWhole t = tiledAgainstWhole(mesh, co, 2);
+    const ComputeResult& tiled = t.tiled;
+    const double diff = t.diff;
+    const std::size_t nanMismatches = t.nanMismatches;
     std::printf("sphere %zu vertices, 2 x 2 tiles: max difference %.3g, NaN mismatches %zu\n", mesh.numVertices(),
                 diff, nanMismatches);
     EXPECT_LE(diff, 1e-6);

@@ -84,7 +84,7 @@ ChildRun runChild(const std::vector<std::string>& args)
 int main(int argc, char** argv)
 {
     CLI::App app{"msii-benchmark: stage timings of msii compute on a generated tablet surface"};
-    double spacing = 0.03, size = 31.6, radius = 1.0, precision = 6.0, voxel = 0;
+    double spacing = 0.03, size = 31.6, radius = 1.0, precision = 6.0, plPrecision = 0, voxel = 0;
     int scales = 16, runs = 3;
     std::string invariants = "V,S,P,L";
     app.add_option("--spacing", spacing, "vertex spacing, mm (default 0.03)");
@@ -92,6 +92,7 @@ int main(int argc, char** argv)
     app.add_option("--radius", radius, "largest radius R, mm (default 1)");
     app.add_option("--scales", scales, "N (default 16)");
     app.add_option("--precision", precision, "voxels per radius (default 6)");
+    app.add_option("--pl-precision", plPrecision, "cells per radius for P and L (default: as --precision)");
     app.add_option("--voxel-size", voxel, "finest voxel (default automatic)");
     app.add_option("--runs", runs, "runs; medians are reported (default 3)");
     app.add_option("--invariants", invariants, "which invariants, e.g. V,S (default V,S,P,L)");
@@ -145,9 +146,11 @@ int main(int argc, char** argv)
             return 1;
         }
         large.inputBytes = double(fs::file_size(terrain));
-        large.compute = runChild({msiiProgram, "compute", terrain, "-r", number(radius), "-n", std::to_string(scales),
-                                       "--precision", number(precision), "--invariants", invariants, "--memory-budget",
-                                       largeBudget, "-q", "--output", terrainOut});
+        std::vector<std::string> args{msiiProgram, "compute", terrain, "-r", number(radius), "-n", std::to_string(scales),
+                                      "--precision", number(precision), "--invariants", invariants, "--memory-budget",
+                                      largeBudget, "-q", "--output", terrainOut};
+        if (plPrecision > 0) args.insert(args.end(), {"--pl-precision", number(plPrecision)});
+        large.compute = runChild(args);
         if (!large.compute.ok) {
             std::fprintf(stderr, "msii-benchmark: error: msii compute failed on the terrain\n");
             fs::remove_all(dir);
@@ -182,6 +185,7 @@ int main(int argc, char** argv)
         o.radius = radius;
         o.scales = scales;
         o.minVoxelsPerRadius = precision;
+        o.patchLinePrecision = plPrecision;
         o.voxelSize = voxel;
         o.computeVolume = has('V');
         o.computeSphere = has('S');
@@ -209,16 +213,17 @@ int main(int argc, char** argv)
             tiled.push_back(tiledWall.seconds());
             tiledLargest = info.largestTileVertices;
             // Checked, not assumed: every value against the untiled run, bit for bit.
-            tiledDiffering = 0;
-            for (const auto* pair : {&t.invariants.volume, &t.invariants.sphere, &t.patchLine.patch, &t.patchLine.line}) {
-                const auto& whole = pair == &t.invariants.volume   ? last.invariants.volume
-                                    : pair == &t.invariants.sphere ? last.invariants.sphere
-                                    : pair == &t.patchLine.patch   ? last.patchLine.patch
-                                                                   : last.patchLine.line;
-                for (std::size_t j = 0; j < pair->size(); ++j)
-                    for (std::size_t i = 0; i < (*pair)[j].size(); ++i)
-                        tiledDiffering += std::memcmp(&(*pair)[j][i], &whole[j][i], sizeof(float)) != 0;
-            }
+            const auto differing = [](const std::vector<std::vector<float>>& a, const std::vector<std::vector<float>>& b) {
+                std::size_t count = 0;
+                for (std::size_t j = 0; j < a.size(); ++j)
+                    for (std::size_t i = 0; i < a[j].size(); ++i)
+                        count += std::memcmp(&a[j][i], &b[j][i], sizeof(float)) != 0;
+                return count;
+            };
+            tiledDiffering = differing(t.invariants.volume, last.invariants.volume) +
+                             differing(t.invariants.sphere, last.invariants.sphere) +
+                             differing(t.patchLine.patch, last.patchLine.patch) +
+                             differing(t.patchLine.line, last.patchLine.line);
         }
         if (run + 1 == runs) lastMesh = std::move(mesh);
     }
@@ -335,8 +340,9 @@ int main(int argc, char** argv)
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
     std::printf("msii-benchmark: tablet %.1f x %.1f mm, spacing %.3f mm, %zu vertices, R = %g, N = %d, "
-                "%s, precision %g, voxel %.4f mm, %d levels, %d runs (medians)\n",
-                size, size, spacing, nv, radius, scales, invariants.c_str(), precision, last.voxelSize,
+                "%s, precision %g (P, L: %g), voxel %.4f mm, %d levels, %d runs (medians)\n",
+                size, size, spacing, nv, radius, scales, invariants.c_str(), precision,
+                plPrecision > 0 ? plPrecision : precision, last.voxelSize,
                 last.invariants.numLevels, runs);
     std::printf("machine: %s, %u hardware threads\n\n", cpuModel().c_str(), std::thread::hardware_concurrency());
     std::printf("| %-62s | %8s |\n|%s|%s|\n", "stage", "seconds", std::string(64, '-').c_str(), std::string(10, '-').c_str());

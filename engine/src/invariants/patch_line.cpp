@@ -202,8 +202,7 @@ std::vector<SampleSums> finestSamples(const TriMesh& mesh, double h0)
             SampleSums& s = out.back();
             s.area += a;
             s.moment += centroid * a;
-            const std::array<double, 6> nn{nrm.x * nrm.x, nrm.y * nrm.y, nrm.z * nrm.z,
-                                           nrm.x * nrm.y, nrm.x * nrm.z, nrm.y * nrm.z};
+            const auto nn = outer(nrm, nrm);
             for (std::size_t q = 0; q < 6; ++q) {
                 s.normalTensor[q] += a * nn[q];
                 s.secondMoment[q] += a * second[q];
@@ -418,8 +417,8 @@ void forEachSampleInCells(const Level& level, const std::int64_t lo[3], const st
 /// point (a larger group makes each point bin more samples beyond its reach).
 constexpr int kGroupBits = 3;
 
-/// Points in groups of (2^groupBits)³ cells of level l (Morton order), so that a group can share one
-/// gathered list of nearby samples: order[k] = (group key, point), groups
+/// Points in groups of (2^groupBits)³ cells of level l (Morton order), so that a group can
+/// share one gathered list of nearby samples: order[k] = (group key, point), groups
 /// [start[g], start[g + 1]), and each point's level-l cell.
 struct CellGroups {
     std::vector<std::pair<std::uint64_t, std::uint32_t>> order;
@@ -456,8 +455,7 @@ CellGroups groupByCells(const std::vector<Vec3>& points, double h0, int l, int g
 /// f′ term is the shift of the mean distance, d + s/2, where the sample is binned; the f″
 /// term goes into channels of its own.
 /// Points whose @p skip is set are left alone. Points go in groups of 2^kGroupBits cells per
-/// axis that share
-/// one gathered list of nearby samples.
+/// axis that share one gathered list of nearby samples.
 void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                     const std::vector<Vec3>& points, const std::vector<char>& skip,
                     std::vector<float>& outP, std::vector<float>& outL, Progress* progress)
@@ -492,8 +490,8 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
             const std::int64_t hi[3] = {gx + groupCells - 1 + reachCells, gy + groupCells - 1 + reachCells,
                                         gz + groupCells - 1 + reachCells};
             forEachSampleInCells(level, lo, hi, [&](std::uint32_t s) {
-                // Only samples within reach of the group's box [0, 4h)³ (the blocks bring
-                // about twice as many).
+                // Only samples within reach of the group's box [0, groupSide)³ (the blocks
+                // bring more).
                 const double x = level.cx[s] - ox, y = level.cy[s] - oy, z = level.cz[s] - oz;
                 const double bx = std::max({0.0, -x, x - groupSide}), by = std::max({0.0, -y, y - groupSide}),
                              bz = std::max({0.0, -z, z - groupSide});
@@ -717,9 +715,9 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         kernel.numBins = int(std::ceil(kernel.reach / kernel.bin)) + 2;  // bins beyond reach: 0
         // Weights per radius and bin centre d_b = (b + 1/2)·bin (paper Eq. 2 for P and L as
         // sums over the distance histogram): f(d) = F((r − d)/w) for P, K((d − r)/w)/w for
-        // L (coarea formula), and f″, f′ for the channels q and s (evaluatePoints).
+        // L (coarea formula), and f″/2 for the channels a·q and a·g·q (evaluatePoints).
         kernel.weights.assign(kw.size() * kChannels * std::size_t(kernel.numBins), 0.0f);
-        std::vector<double> binVariance(kw.size(), kernel.bin * kernel.bin / 6.0);
+        const double binVariance = kernel.bin * kernel.bin / 6.0;
         for (std::size_t k = 0; k < kw.size(); ++k) {
             const double r = radii[std::size_t(levelRadii[k])], w = kw[k];
             int whole = 0, inside = 0;  // whole areas on bins [0, whole), nothing from inside on
@@ -745,7 +743,7 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         }
 
         // A value is masked when the kernel's reach, plus the spread of a sample, gets to a
-        // border: r + 3w + 2 h0 (V and S: r + 4 h + 2 h0, less or equal).
+        // border: r + max(3w, 4h) + 2 h0, so at least where V and S are (r + 4h + 2 h0).
         const auto masked = [&](std::size_t i, std::size_t k) {
             return !options.borderDistance.empty() &&
                    radii[std::size_t(levelRadii[k])] + std::max(kKernelHalfSupport * kw[k], 4.0 * level.h) + 2.0 * h0 >
@@ -757,7 +755,7 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
             if (masked(i, k)) return;
             // K has no second moment, but the binning adds a tent of variance bin²/6 to the
             // blur across r: P = π r² gives π (r² + bin²/6), divided out.
-            if (options.computePatch) result.patch[j][i] = float(sumP / (M_PI * (r * r + binVariance[k])));
+            if (options.computePatch) result.patch[j][i] = float(sumP / (M_PI * (r * r + binVariance)));
             if (options.computeLine) result.line[j][i] = float(sumL / (2.0 * M_PI * r));
         };
         std::vector<char> skip(nv);  // every radius of the level is masked
