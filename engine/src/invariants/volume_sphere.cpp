@@ -400,12 +400,16 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
     result.volume.assign(radii.size(), std::vector<float>(nv, nan));
     if (options.computeSphere) result.sphere.assign(radii.size(), std::vector<float>(nv, nan));
 
-    // Fine index positions of the vertices.
-    std::vector<openvdb::Vec3d> fineIndex(nv);
+    // Fine index positions of the vertices, global: p / h, without the grid's shift T (an
+    // integer number of voxels, subtracted after rounding down), so that a vertex on a cell
+    // face picks the same cell in a tile as in the whole mesh.
+    const std::array<std::int64_t, 3>& shiftIndex = levelSet.impl().shiftIndex;
+    const Coord shiftCoord{int(shiftIndex[0]), int(shiftIndex[1]), int(shiftIndex[2])};
+    std::vector<openvdb::Vec3d> globalIndex(nv);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             const Vec3& p = mesh.points[i];
-            fineIndex[i] = sdf.transform().worldToIndex(openvdb::Vec3d(p.x, p.y, p.z));
+            globalIndex[i] = openvdb::Vec3d(p.x / h0, p.y / h0, p.z / h0);
         }
     });
 
@@ -415,7 +419,7 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
     // level (blocks of 8 fine voxels), and coarse tiles copy the fine side: coarse blocks
     // are 2^l times larger, too coarse to tell sides apart near an open border.
     openvdb::CoordBBox vertexBox;
-    for (const auto& u : fineIndex) vertexBox.expand(Coord::floor(u));
+    for (const auto& u : globalIndex) vertexBox.expand(Coord::floor(u) - shiftCoord);
     int finePad = 0;
     for (int l = 0; l < numLevels; ++l) {
         double rhoMax = 0;
@@ -452,9 +456,9 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
         std::vector<std::array<float, 3>> frac(nv);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                const openvdb::Vec3d u = (fineIndex[i] - openvdb::Vec3d(shift)) / scale;
+                const openvdb::Vec3d u = (globalIndex[i] - openvdb::Vec3d(shift)) / scale;
                 const Coord b(int(std::floor(u.x())), int(std::floor(u.y())), int(std::floor(u.z())));
-                base[i] = b;
+                base[i] = b - Coord(shiftCoord.x() >> level, shiftCoord.y() >> level, shiftCoord.z() >> level);
                 frac[i] = {float(u.x() - b.x()), float(u.y() - b.y()), float(u.z() - b.z())};
             }
         });
@@ -560,7 +564,7 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
                                 nodePhi[n] = sdfAcc.getValue(ijk);
                             } else {
                                 const openvdb::Vec3d w =
-                                    sdf.transform().indexToWorld(fineIndexOf(ijk, level));
+                                    (fineIndexOf(ijk, level) + openvdb::Vec3d(shiftCoord.asVec3d())) * h0;
                                 nodePhi[n] = float(levelSet.impl().distance->exactSignedDistance(
                                     Vec3(w.x(), w.y(), w.z()), std::uint32_t(seedVertex[n]), 4.0 * h0));
                             }

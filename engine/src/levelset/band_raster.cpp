@@ -46,7 +46,7 @@ Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const Band
 {
     const double h = options.voxelSize, w = options.halfWidth;
     const double reach = w * h, reach2 = reach * reach;
-    const Vec3& o = options.origin;
+    const std::array<std::int64_t, 3>& o = options.originIndex;
     const std::size_t nf = mesh.numTriangles();
 
     std::vector<VoxelRange> ranges(nf);
@@ -56,8 +56,8 @@ Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const Band
             for (int a = 0; a < 3; ++a) {
                 const double p0 = mesh.points[t[0]][a], p1 = mesh.points[t[1]][a],
                              p2 = mesh.points[t[2]][a];
-                ranges[f].lo[a] = int(std::ceil((std::min({p0, p1, p2}) - o[a]) / h - w));
-                ranges[f].hi[a] = int(std::floor((std::max({p0, p1, p2}) - o[a]) / h + w));
+                ranges[f].lo[a] = int(std::int64_t(std::ceil(std::min({p0, p1, p2}) / h - w)) - o[std::size_t(a)]);
+                ranges[f].hi[a] = int(std::int64_t(std::floor(std::max({p0, p1, p2}) / h + w)) - o[std::size_t(a)]);
             }
         }
     });
@@ -122,8 +122,8 @@ Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const Band
                 for (int x = lo[0]; x <= hi[0]; ++x)
                     for (int y = lo[1]; y <= hi[1]; ++y)
                         for (int z = lo[2]; z <= hi[2]; ++z) {
-                            const Vec3 p(o.x + h * (origin.x() + x), o.y + h * (origin.y() + y),
-                                         o.z + h * (origin.z() + z));
+                            const Vec3 p(h * double(o[0] + origin.x() + x), h * double(o[1] + origin.y() + y),
+                                         h * double(o[2] + origin.z() + z));
                             const int offset = (x << 2 * kLog2) | (y << kLog2) | z;
                             MeshDistance::Closest& current = best[std::size_t(offset)];
                             // Lower bound of the squared distance: the distance to the
@@ -146,7 +146,7 @@ Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const Band
                 const MeshDistance::Closest& c = best[std::size_t(offset)];
                 if (c.face == std::uint32_t(-1)) continue;
                 const openvdb::Coord ijk = origin + Leaf::offsetToLocalCoord(offset);
-                const Vec3 p(o.x + h * ijk.x(), o.y + h * ijk.y(), o.z + h * ijk.z());
+                const Vec3 p(h * double(o[0] + ijk.x()), h * double(o[1] + ijk.y()), h * double(o[2] + ijk.z()));
                 bool beyondBorder = false;
                 const double d = distance.signedFromClosest(p, c, &beyondBorder);
                 if (!leaf) leaf = std::make_unique<Leaf>(origin, float(reach), false);

@@ -4,11 +4,17 @@
 
 #include <openvdb/openvdb.h>
 
+#include <array>
+#include <cstdint>
+
 namespace msii::detail {
 
 struct BandOptions {
     double voxelSize = 0;  ///< h, in mesh units
-    Vec3 origin;           ///< world position of voxel (0, 0, 0)'s centre
+    /// Voxel (i, j, k)'s centre lies at (i, j, k) + originIndex times h: positions are
+    /// computed from the whole (global) index, so a part of a mesh with another shift gets
+    /// bit-identical distances.
+    std::array<std::int64_t, 3> originIndex{};
     double halfWidth = 2;  ///< voxels closer to the mesh than halfWidth·h form the band
 };
 

@@ -70,8 +70,11 @@ LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options, Prog
     // patch of a closed slab) gives the same values as the whole.
     auto transform = openvdb::math::Transform::createLinearTransform(h);
     const Vec3 centre = (lo + hi) * 0.5;
-    const auto snap = [&](double c) { return 512.0 * h * (std::round(c / (512.0 * h)) - 4.0); };
-    const openvdb::Vec3d shift(snap(centre.x), snap(centre.y), snap(centre.z));
+    // The shift in voxels is an integer, kept exact: positions are computed from the global
+    // index (index + shift) · h, identical for any part of the mesh.
+    const auto snap = [&](double c) { return std::int64_t(512.0 * (std::round(c / (512.0 * h)) - 4.0)); };
+    const std::array<std::int64_t, 3> shiftIndex{snap(centre.x), snap(centre.y), snap(centre.z)};
+    const openvdb::Vec3d shift(double(shiftIndex[0]) * h, double(shiftIndex[1]) * h, double(shiftIndex[2]) * h);
     transform->postTranslate(shift);
     auto distance = std::make_shared<detail::MeshDistance>(mesh);
     if (progress) progress->advance();
@@ -79,7 +82,7 @@ LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options, Prog
     // Exact signed distances in the band; the sides of the space off it follow below.
     detail::BandOptions bandOptions;
     bandOptions.voxelSize = h;
-    bandOptions.origin = Vec3(shift.x(), shift.y(), shift.z());
+    bandOptions.originIndex = shiftIndex;
     bandOptions.halfWidth = options.halfWidth;
     detail::Band band = detail::rasterizeBand(mesh, *distance, bandOptions);
     openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(band.distance);
@@ -108,6 +111,7 @@ LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options, Prog
 
     auto impl = std::make_unique<LevelSet::Impl>();
     impl->grid = grid;
+    impl->shiftIndex = shiftIndex;
     impl->distance = distance;
     impl->guessedSide = guessed;
     impl->info.voxelSize = h;
