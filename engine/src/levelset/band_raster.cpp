@@ -102,6 +102,8 @@ Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const Band
         Best& best = *scratch.local();
         for (std::size_t b = r.begin(); b < r.end(); ++b) {
             const openvdb::Coord origin = blockOrigin(pairs[blockFirst[b]].first);
+            // The block's first voxel as a global index (whole numbers, exact in double).
+            const double gx = double(o[0] + origin.x()), gy = double(o[1] + origin.y()), gz = double(o[2] + origin.z());
             for (auto& c : best) {
                 c.squaredDistance = reach2;
                 c.face = std::uint32_t(-1);
@@ -122,8 +124,7 @@ Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const Band
                 for (int x = lo[0]; x <= hi[0]; ++x)
                     for (int y = lo[1]; y <= hi[1]; ++y)
                         for (int z = lo[2]; z <= hi[2]; ++z) {
-                            const Vec3 p(h * double(o[0] + origin.x() + x), h * double(o[1] + origin.y() + y),
-                                         h * double(o[2] + origin.z() + z));
+                            const Vec3 p(h * (gx + x), h * (gy + y), h * (gz + z));
                             const int offset = (x << 2 * kLog2) | (y << kLog2) | z;
                             MeshDistance::Closest& current = best[std::size_t(offset)];
                             // Lower bound of the squared distance: the distance to the
@@ -146,7 +147,8 @@ Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const Band
                 const MeshDistance::Closest& c = best[std::size_t(offset)];
                 if (c.face == std::uint32_t(-1)) continue;
                 const openvdb::Coord ijk = origin + Leaf::offsetToLocalCoord(offset);
-                const Vec3 p(h * double(o[0] + ijk.x()), h * double(o[1] + ijk.y()), h * double(o[2] + ijk.z()));
+                const Vec3 p(h * (gx + (ijk.x() - origin.x())), h * (gy + (ijk.y() - origin.y())),
+                             h * (gz + (ijk.z() - origin.z())));
                 bool beyondBorder = false;
                 const double d = distance.signedFromClosest(p, c, &beyondBorder);
                 if (!leaf) leaf = std::make_unique<Leaf>(origin, float(reach), false);
