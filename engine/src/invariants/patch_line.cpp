@@ -568,7 +568,9 @@ constexpr double kWellSpread = 0.02;
 /// samples within 2h on the point's side of the surface (kSameSide), weighted (1 −
 /// (d/2h)²)², so linear fields are reproduced. Where such samples do not span the plane
 /// (creases, corners), @p unresolved is set instead: those points are evaluated directly.
-/// Points go in groups of 4³ cells.
+/// Points go in groups of 2³ cells (of 4³, four fifths of the samples near a group lie
+/// beyond 2h of a point; of 2³, two thirds).
+constexpr int kFitGroupBits = 1;
 void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec3>& p,
                             const std::vector<Vec3>& n, const std::vector<char>& skip,
                             int numFields, const std::vector<const float*>& values,
@@ -576,30 +578,44 @@ void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec
 {
     unresolved.assign(p.size(), 0);
     const double h = level.h, radius2 = 4.0 * h * h;
-    const CellGroups groups = groupByCells(p, h0, level.index);
+    const CellGroups groups = groupByCells(p, h0, level.index, kFitGroupBits);
+    const std::int64_t groupCells = std::int64_t(1) << kFitGroupBits;
+    const double groupSide = double(groupCells) * h;
     const auto& order = groups.order;
     const auto& groupStart = groups.start;
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groupStart.size() - 1), [&](const auto& range) {
+        // The group's nearby samples, copied together (index, centroid, normal tensor), so
+        // that each point's loop over them reads memory in order.
         std::vector<std::uint32_t> near, index;
+        std::vector<double> nearX, nearY, nearZ;
+        std::array<std::vector<float>, 6> nearT;
         std::vector<double> weight;
         std::vector<std::array<double, 3>> basis;
         for (std::size_t g = range.begin(); g < range.end(); ++g) {
             const CellCoord& c0 = groups.cell[order[groupStart[g]].second];
-            const std::int64_t gx = c0.x & ~std::int64_t(3), gy = c0.y & ~std::int64_t(3),
-                               gz = c0.z & ~std::int64_t(3);
+            const std::int64_t gx = c0.x & ~(groupCells - 1), gy = c0.y & ~(groupCells - 1),
+                               gz = c0.z & ~(groupCells - 1);
             near.clear();
             // Samples within 2h of the group's box: at most 2 cells beyond it.
-            const std::int64_t lo[3] = {gx - 2, gy - 2, gz - 2}, hi[3] = {gx + 5, gy + 5, gz + 5};
+            const std::int64_t lo[3] = {gx - 2, gy - 2, gz - 2},
+                               hi[3] = {gx + groupCells + 1, gy + groupCells + 1, gz + groupCells + 1};
             const double ox = double(gx - (kOffset >> level.index)) * h,
                          oy = double(gy - (kOffset >> level.index)) * h,
                          oz = double(gz - (kOffset >> level.index)) * h;
             forEachSampleInCells(level, lo, hi, [&](std::uint32_t s) {
                 const double x = level.cx[s] - ox, y = level.cy[s] - oy, z = level.cz[s] - oz;
-                const double bx = std::max({0.0, -x, x - 4.0 * h}), by = std::max({0.0, -y, y - 4.0 * h}),
-                             bz = std::max({0.0, -z, z - 4.0 * h});
+                const double bx = std::max({0.0, -x, x - groupSide}), by = std::max({0.0, -y, y - groupSide}),
+                             bz = std::max({0.0, -z, z - groupSide});
                 if (bx * bx + by * by + bz * bz < radius2) near.push_back(s);
             });
+            nearX.resize(near.size()), nearY.resize(near.size()), nearZ.resize(near.size());
+            for (auto& t : nearT) t.resize(near.size());
+            for (std::size_t k = 0; k < near.size(); ++k) {
+                const std::uint32_t s = near[k];
+                nearX[k] = level.cx[s], nearY[k] = level.cy[s], nearZ[k] = level.cz[s];
+                for (std::size_t c = 0; c < 6; ++c) nearT[c][k] = level.tensor[c][s];
+            }
             for (std::size_t q = groupStart[g]; q < groupStart[g + 1]; ++q) {
                 const std::uint32_t i = order[q].second;
                 if (skip[i]) continue;
@@ -608,19 +624,20 @@ void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec
                 const Vec3 v = cross(nrm, u);
                 double m[3][3] = {};
                 index.clear(), weight.clear(), basis.clear();
-                for (std::uint32_t s : near) {
-                    const Vec3 d(level.cx[s] - p[i].x, level.cy[s] - p[i].y, level.cz[s] - p[i].z);
-                    const double q2 = squaredNorm(d) / radius2;
-                    if (q2 >= 1.0) continue;
-                    const auto& t = level.tensor;
-                    const double agree = nrm.x * nrm.x * t[0][s] + nrm.y * nrm.y * t[1][s] + nrm.z * nrm.z * t[2][s] +
-                                         2.0 * (nrm.x * nrm.y * t[3][s] + nrm.x * nrm.z * t[4][s] + nrm.y * nrm.z * t[5][s]);
+                for (std::size_t k = 0; k < near.size(); ++k) {
+                    const Vec3 d(nearX[k] - p[i].x, nearY[k] - p[i].y, nearZ[k] - p[i].z);
+                    const double d2 = squaredNorm(d);
+                    if (d2 >= radius2) continue;  // (no division for the many beyond)
+                    const double q2 = d2 / radius2;
+                    const auto& t = nearT;
+                    const double agree = nrm.x * nrm.x * t[0][k] + nrm.y * nrm.y * t[1][k] + nrm.z * nrm.z * t[2][k] +
+                                         2.0 * (nrm.x * nrm.y * t[3][k] + nrm.x * nrm.z * t[4][k] + nrm.y * nrm.z * t[5][k]);
                     if (agree < kSameSide) continue;
                     const double wt = (1.0 - q2) * (1.0 - q2);
                     const std::array<double, 3> phi{1.0, dot(d, u) / h, dot(d, v) / h};
                     for (int a = 0; a < 3; ++a)
                         for (int b = 0; b < 3; ++b) m[a][b] += wt * phi[a] * phi[b];
-                    index.push_back(s);
+                    index.push_back(near[k]);
                     weight.push_back(wt);
                     basis.push_back(phi);
                 }
