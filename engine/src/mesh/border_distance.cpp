@@ -12,12 +12,12 @@ namespace msii {
 
 namespace {
 
-double pointSegmentDistance(const Vec3& p, const Vec3& a, const Vec3& b)
+double pointSegmentDistance2(const Vec3& p, const Vec3& a, const Vec3& b)
 {
     const Vec3 ab = b - a;
     const double len2 = squaredNorm(ab);
     const double t = len2 > 0 ? std::clamp(dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
-    return norm(p - (a + ab * t));
+    return squaredNorm(p - (a + ab * t));
 }
 
 std::uint64_t cellKey(std::int64_t x, std::int64_t y, std::int64_t z)
@@ -48,22 +48,34 @@ std::vector<double> borderDistance(const TriMesh& mesh,
                 for (auto z = cellOf(std::min(a.z, b.z)); z <= cellOf(std::max(a.z, b.z)); ++z)
                     grid[cellKey(x, y, z)].push_back(std::uint32_t(e));
     }
+    // Per vertex: its own cell first, then the neighbours whose box is nearer than the
+    // nearest edge so far; squared distances, one square root at the end (the same value).
+    const std::int64_t order[27][3] = {
+        {0, 0, 0},   {-1, 0, 0},  {1, 0, 0},   {0, -1, 0},  {0, 1, 0},    {0, 0, -1},  {0, 0, 1},
+        {-1, -1, 0}, {-1, 1, 0},  {1, -1, 0},  {1, 1, 0},   {-1, 0, -1},  {-1, 0, 1},  {1, 0, -1},
+        {1, 0, 1},   {0, -1, -1}, {0, -1, 1},  {0, 1, -1},  {0, 1, 1},    {-1, -1, -1}, {-1, -1, 1},
+        {-1, 1, -1}, {-1, 1, 1},  {1, -1, -1}, {1, -1, 1},  {1, 1, -1},   {1, 1, 1}};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.numVertices()), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             const Vec3& p = mesh.points[i];
-            const auto cx = cellOf(p.x), cy = cellOf(p.y), cz = cellOf(p.z);
-            double best = cap;
-            for (int dx = -1; dx <= 1; ++dx)
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dz = -1; dz <= 1; ++dz) {
-                        const auto it = grid.find(cellKey(cx + dx, cy + dy, cz + dz));
-                        if (it == grid.end()) continue;
-                        for (auto e : it->second)
-                            best = std::min(best, pointSegmentDistance(
-                                                      p, mesh.points[borderEdges[e][0]],
-                                                      mesh.points[borderEdges[e][1]]));
-                    }
-            result[i] = best;
+            const std::int64_t c[3] = {cellOf(p.x), cellOf(p.y), cellOf(p.z)};
+            const double at[3] = {p.x, p.y, p.z};
+            double best2 = cap * cap;
+            for (const auto& o : order) {
+                // Squared distance from p to the neighbour cell's box.
+                double box2 = 0;
+                for (int k = 0; k < 3; ++k) {
+                    const double lo = double(c[k] + o[k]) * cell, gap = o[k] < 0 ? at[k] - (lo + cell) : lo - at[k];
+                    if (o[k] != 0 && gap > 0) box2 += gap * gap;
+                }
+                if (box2 >= best2) continue;
+                const auto it = grid.find(cellKey(c[0] + o[0], c[1] + o[1], c[2] + o[2]));
+                if (it == grid.end()) continue;
+                for (auto e : it->second)
+                    best2 = std::min(best2, pointSegmentDistance2(p, mesh.points[borderEdges[e][0]],
+                                                                  mesh.points[borderEdges[e][1]]));
+            }
+            result[i] = std::min(cap, std::sqrt(best2));
         }
     });
     return result;
