@@ -12,7 +12,7 @@
 ///    the distance d = |x − p| of area, and of area·g with g = |∇_M d| = sqrt(1 − (û·n)²)
 ///    (û = (x − p)/d). Then P(r) = Σ a·F((r − d)/w) and, by the coarea formula
 ///    L = ∫_M δ(|x − p| − r)·|∇_M |x − p|| dA, L(r) = Σ a·g·K((d − r)/w)/w (paper Eq. 2),
-///    with K a kernel of knot spacing w (2 cells; 2.5 on the finest level) and F its
+///    with K a kernel of knot spacing w (2 cells, at most r/3) and F its
 ///    integral, and all radii of a level share the pass.
 /// 4. K = 4/3 B(t) − 1/6 (B(t + 1) + B(t − 1)), B the cubic B-spline: ∫K = 1, zero second
 ///    moment, C², support ±3w. So the blur across r leaves any locally quadratic P(r) and
