@@ -10,7 +10,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <string>
 #include <vector>
 
 using namespace msii;
@@ -58,15 +60,23 @@ TiledAgainstWhole tiledAgainstWhole(const TriMesh& mesh, const ComputeOptions& c
     return t;
 }
 
-TriMesh tablet()
+TriMesh tablet(double width = 18, double height = 12, double spacing = 0.12, std::uint64_t seed = 3)
 {
     samples::HeightFieldOptions ho;
     ho.kind = samples::HeightFieldKind::Tablet;
-    ho.width = 18;
-    ho.height = 12;
-    ho.spacing = 0.12;
-    ho.seed = 3;
+    ho.width = width;
+    ho.height = height;
+    ho.spacing = spacing;
+    ho.seed = seed;
     return samples::makeHeightField(ho);
+}
+
+/// Prints how @p t compares (prefixed by @p what) and expects every value bit-identical.
+void expectBitIdentical(const TiledAgainstWhole& t, const std::string& what)
+{
+    std::printf("%s: max difference %.3g, NaN mismatches %zu\n", what.c_str(), t.diff, t.nanMismatches);
+    EXPECT_EQ(t.diff, 0.0) << what;
+    EXPECT_EQ(t.nanMismatches, 0u) << what;
 }
 
 } // namespace
@@ -104,22 +114,12 @@ TEST(TiledCompute, OpenTabletEqualsUntiled)
 // dependence (dependenceReach), which the halo must cover for identical values.
 TEST(TiledCompute, DenseTabletEqualsUntiledBitForBit)
 {
-    samples::HeightFieldOptions ho;
-    ho.kind = samples::HeightFieldKind::Tablet;
-    ho.width = 7;
-    ho.height = 6;
-    ho.spacing = 0.03;
-    ho.seed = 4;
-    const TriMesh mesh = samples::makeHeightField(ho);
+    const TriMesh mesh = tablet(7, 6, 0.03, 4);
     ComputeOptions co;
     co.radius = 1.0;
     const TiledAgainstWhole t = tiledAgainstWhole(mesh, co, 2);
-    std::printf("dense tablet %zu vertices, 2 x 2 tiles (halo %.3f): max difference %.3g, NaN mismatches %zu\n",
-                mesh.numVertices(), t.info.haloWidth, t.diff, t.nanMismatches);
-    const double diff = t.diff;
-    const std::size_t nanMismatches = t.nanMismatches;
-    EXPECT_EQ(diff, 0.0);
-    EXPECT_EQ(nanMismatches, 0u);
+    expectBitIdentical(t, "dense tablet " + std::to_string(mesh.numVertices()) + " vertices, 2 x 2 tiles (halo " +
+                              std::to_string(t.info.haloWidth) + ")");
 }
 
 // Every vertex moved onto a voxel face or centre plane: x and y multiples of 1/32 mm, which
@@ -140,12 +140,7 @@ TEST(TiledCompute, VerticesOnVoxelPlanesEqualUntiledBitForBit)
     for (Vec3& p : mesh.points)
         p.x = 12.0 + std::round(p.x / step) * step, p.y = 12.0 + std::round(p.y / step) * step;
     const TiledAgainstWhole t = tiledAgainstWhole(mesh, co, 3);
-    std::printf("tablet on voxel planes, %zu vertices, 3 x 3 tiles: max difference %.3g, NaN mismatches %zu\n",
-                mesh.numVertices(), t.diff, t.nanMismatches);
-    const double diff = t.diff;
-    const std::size_t nanMismatches = t.nanMismatches;
-    EXPECT_EQ(diff, 0.0);
-    EXPECT_EQ(nanMismatches, 0u);
+    expectBitIdentical(t, "tablet on voxel planes, " + std::to_string(mesh.numVertices()) + " vertices, 3 x 3 tiles");
 }
 
 TEST(TiledCompute, ClosedSphereEqualsUntiled)
@@ -157,15 +152,9 @@ TEST(TiledCompute, ClosedSphereEqualsUntiled)
     ComputeOptions co;
     co.radius = 1.0;
     const TiledAgainstWhole t = tiledAgainstWhole(mesh, co, 2);
-    const ComputeResult& tiled = t.tiled;
-    const double diff = t.diff;
-    const std::size_t nanMismatches = t.nanMismatches;
-    std::printf("sphere %zu vertices, 2 x 2 tiles: max difference %.3g, NaN mismatches %zu\n", mesh.numVertices(),
-                diff, nanMismatches);
-    EXPECT_EQ(diff, 0.0);
-    EXPECT_EQ(nanMismatches, 0u);
+    expectBitIdentical(t, "sphere " + std::to_string(mesh.numVertices()) + " vertices, 2 x 2 tiles");
     // A closed mesh: nothing is masked, tiled or not.
-    EXPECT_EQ(tiled.invariants.numMaskedValues, 0u);
+    EXPECT_EQ(t.tiled.invariants.numMaskedValues, 0u);
 }
 
 TEST(TiledCompute, TilesFromMemoryBudget)

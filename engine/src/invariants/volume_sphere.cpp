@@ -454,11 +454,12 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
         const double scale = double(1 << level), shift = 0.5 * (scale - 1.0);
         std::vector<Coord> base(nv);
         std::vector<std::array<float, 3>> frac(nv);
+        const Coord levelShift(shiftCoord.x() >> level, shiftCoord.y() >> level, shiftCoord.z() >> level);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
                 const openvdb::Vec3d u = (globalIndex[i] - openvdb::Vec3d(shift)) / scale;
                 const Coord b(int(std::floor(u.x())), int(std::floor(u.y())), int(std::floor(u.z())));
-                base[i] = b - Coord(shiftCoord.x() >> level, shiftCoord.y() >> level, shiftCoord.z() >> level);
+                base[i] = b - levelShift;
                 frac[i] = {float(u.x() - b.x()), float(u.y() - b.y()), float(u.z() - b.z())};
             }
         });

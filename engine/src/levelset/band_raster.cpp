@@ -146,9 +146,8 @@ Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const Band
             for (int offset = 0; offset < int(Leaf::SIZE); ++offset) {
                 const MeshDistance::Closest& c = best[std::size_t(offset)];
                 if (c.face == std::uint32_t(-1)) continue;
-                const openvdb::Coord ijk = origin + Leaf::offsetToLocalCoord(offset);
-                const Vec3 p(h * (gx + (ijk.x() - origin.x())), h * (gy + (ijk.y() - origin.y())),
-                             h * (gz + (ijk.z() - origin.z())));
+                const openvdb::Coord local = Leaf::offsetToLocalCoord(offset);
+                const Vec3 p(h * (gx + local.x()), h * (gy + local.y()), h * (gz + local.z()));
                 bool beyondBorder = false;
                 const double d = distance.signedFromClosest(p, c, &beyondBorder);
                 if (!leaf) leaf = std::make_unique<Leaf>(origin, float(reach), false);

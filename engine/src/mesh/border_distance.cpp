@@ -4,9 +4,12 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <unordered_map>
+#include <vector>
 
 namespace msii {
 
@@ -50,11 +53,13 @@ std::vector<double> borderDistance(const TriMesh& mesh,
     }
     // Per vertex: its own cell first, then the neighbours whose box is nearer than the
     // nearest edge so far; squared distances, one square root at the end (the same value).
-    const std::int64_t order[27][3] = {
-        {0, 0, 0},   {-1, 0, 0},  {1, 0, 0},   {0, -1, 0},  {0, 1, 0},    {0, 0, -1},  {0, 0, 1},
-        {-1, -1, 0}, {-1, 1, 0},  {1, -1, 0},  {1, 1, 0},   {-1, 0, -1},  {-1, 0, 1},  {1, 0, -1},
-        {1, 0, 1},   {0, -1, -1}, {0, -1, 1},  {0, 1, -1},  {0, 1, 1},    {-1, -1, -1}, {-1, -1, 1},
-        {-1, 1, -1}, {-1, 1, 1},  {1, -1, -1}, {1, -1, 1},  {1, 1, -1},   {1, 1, 1}};
+    std::vector<std::array<std::int64_t, 3>> order;  // the 27 cells, fewest offset axes first
+    for (std::int64_t dx = -1; dx <= 1; ++dx)
+        for (std::int64_t dy = -1; dy <= 1; ++dy)
+            for (std::int64_t dz = -1; dz <= 1; ++dz) order.push_back({dx, dy, dz});
+    std::stable_sort(order.begin(), order.end(), [](const auto& a, const auto& b) {
+        return std::abs(a[0]) + std::abs(a[1]) + std::abs(a[2]) < std::abs(b[0]) + std::abs(b[1]) + std::abs(b[2]);
+    });
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.numVertices()), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             const Vec3& p = mesh.points[i];
