@@ -331,26 +331,27 @@ constexpr double kKernelCells = 2.0;
 /// Histogram bins per cell. Linear sharing between bin centres blurs d by a tent of
 /// variance bin²/6; few bins keep the weighted sums per radius cheap.
 constexpr int kBinsPerCell = 8;
-/// Histogram channels per bin: a, a·g (shared linearly between bins b and b + 1), a·q and
-/// a·g·q (nearest bin: they carry a small correction).
+/// Histogram channels per bin: a, a·g, a·q and a·g·q, all shared linearly between the bins
+/// b and b + 1, as one vector of 4 floats.
 constexpr std::size_t kChannels = 4;
+typedef float Channels __attribute__((vector_size(16)));
 
-/// For @p n samples seen from p (coordinates relative to p): the histogram bins of the
+/// For @p n samples seen from p (coordinates relative to p): the histogram bin of the
 /// sample's mean distance d + (tr C − q)/(2d) (d = |x − p| at the centroid, with d at least
 /// @p minDistance in the correction), shared linearly between the two nearest bin centres
-/// (bin b gets 1 − share, b + 1 gets share; b = @p beyond beyond @p reach2, squared; nearest
-/// is the nearest bin centre, or beyond), the coarea
-/// factor g = sqrt(1 − mean (û·n)²) from the sample's normal tensor t, and q = ûᵀCû from
-/// its covariance C (tensors xx, yy, zz, xy, xz, yz). Plain loops over floats, compiled
-/// for AVX2 as well (chosen at run time; same results).
+/// (bin b gets 1 − share, b + 1 gets share; b = @p beyond beyond @p reach2, squared), and
+/// the channels a·(1, g, q, g·q) with the coarea factor g = sqrt(1 − mean (û·n)²) from the
+/// sample's normal tensor t and q = ûᵀCû from its covariance C (tensors xx, yy, zz, xy, xz,
+/// yz). Plain loops over floats, compiled for AVX2 as well (chosen at run time; same
+/// results).
 __attribute__((target_clones("avx2", "default"))) void binSamples(
     std::size_t n, const float* __restrict x, const float* __restrict y, const float* __restrict z,
-    const float* __restrict txx, const float* __restrict tyy, const float* __restrict tzz,
-    const float* __restrict txy, const float* __restrict txz, const float* __restrict tyz,
-    const float* __restrict cxx, const float* __restrict cyy, const float* __restrict czz,
-    const float* __restrict cxy, const float* __restrict cxz, const float* __restrict cyz, float px,
-    float py, float pz, float reach2, float invBin, float minDistance, std::int32_t beyond, std::int32_t* __restrict bin,
-    std::int32_t* __restrict nearest, float* __restrict share, float* __restrict g, float* __restrict q)
+    const float* __restrict area, const float* __restrict txx, const float* __restrict tyy,
+    const float* __restrict tzz, const float* __restrict txy, const float* __restrict txz,
+    const float* __restrict tyz, const float* __restrict cxx, const float* __restrict cyy,
+    const float* __restrict czz, const float* __restrict cxy, const float* __restrict cxz,
+    const float* __restrict cyz, float px, float py, float pz, float reach2, float invBin, float minDistance,
+    std::int32_t beyond, std::int32_t* __restrict bin, float* __restrict share, float* __restrict channels)
 {
     for (std::size_t k = 0; k < n; ++k) {
         const float dx = x[k] - px, dy = y[k] - py, dz = z[k] - pz;
@@ -358,20 +359,19 @@ __attribute__((target_clones("avx2", "default"))) void binSamples(
         const float inv2 = 1.0f / (d2 + 1e-30f);  // branch-free, so that the loop vectorises
         const float tn = dx * dx * txx[k] + dy * dy * tyy[k] + dz * dz * tzz[k] +
                          2.0f * (dx * dy * txy[k] + dx * dz * txz[k] + dy * dz * tyz[k]);
-        g[k] = std::sqrt(std::max(0.0f, 1.0f - tn * inv2));
-        const float cn = (dx * dx * cxx[k] + dy * dy * cyy[k] + dz * dz * czz[k] +
-                          2.0f * (dx * dy * cxy[k] + dx * dz * cxz[k] + dy * dz * cyz[k])) * inv2;
+        const float g = std::sqrt(std::max(0.0f, 1.0f - tn * inv2));
+        const float q = (dx * dx * cxx[k] + dy * dy * cyy[k] + dz * dz * czz[k] +
+                         2.0f * (dx * dy * cxy[k] + dx * dz * cxz[k] + dy * dz * cyz[k])) * inv2;
         const float d = std::sqrt(d2);
-        q[k] = cn;
-        const float mean = d + 0.5f * (cxx[k] + cyy[k] + czz[k] - cn) / std::max(d, minDistance);
+        const float mean = d + 0.5f * (cxx[k] + cyy[k] + czz[k] - q) / std::max(d, minDistance);
         // The mean may lie up to 3/4 cell beyond d (a cell's covariance has trace <= 3h²/4,
         // and d is taken at least h/2): such a sample stays in the last bin with a neighbour.
         const float u = std::min(std::max(0.0f, mean * invBin - 0.5f), float(beyond - 1));
         const std::int32_t b = std::min(std::int32_t(u), beyond - 2);
         share[k] = u - float(b);
-        const bool within = d2 < reach2;
-        nearest[k] = within ? b + (share[k] >= 0.5f ? 1 : 0) : beyond;
-        bin[k] = within ? b : beyond;
+        bin[k] = d2 < reach2 ? b : beyond;
+        const float a = area[k], ag = a * g;
+        channels[4 * k] = a, channels[4 * k + 1] = ag, channels[4 * k + 2] = a * q, channels[4 * k + 3] = ag * q;
     }
 }
 
@@ -418,6 +418,8 @@ void forEachSampleInCells(const Level& level, const std::int64_t lo[3], const st
 /// sums: 8, so that copying the samples' 16 numbers costs less than binning them for each
 /// point (a larger group makes each point bin more samples beyond its reach).
 constexpr int kGroupBits = 3;
+/// Samples per run with a bounding box in a group's list (evaluatePoints).
+constexpr std::size_t kChunk = 16;
 
 /// Points in groups of (2^groupBits)³ cells of level l (Morton order), so that a group can
 /// share one gathered list of nearby samples: order[k] = (group key, point), groups
@@ -478,9 +480,12 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
     if (progress) progress->start("P and L, level " + std::to_string(l), groupStart.size() - 1);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groupStart.size() - 1), [&](const auto& range) {
         Gathered near;
-        std::vector<std::int32_t> bins, nearest;
-        std::vector<float> share, factor, along;
-        std::vector<float> hist(kChannels * (static_cast<std::size_t>(numBins) + 1));
+        std::vector<std::int32_t> bins;
+        std::vector<float> share;
+        std::vector<Channels> channels;
+        std::vector<std::array<float, 6>> chunkBox;  // min x, y, z, max x, y, z
+        std::vector<Channels> hist(static_cast<std::size_t>(numBins) + 1);
+        const float* histFloats = reinterpret_cast<const float*>(hist.data());
         for (std::size_t g = range.begin(); g < range.end(); ++g) {
             const std::size_t begin = groupStart[g], end = groupStart[g + 1];
             const CellCoord& c0 = cell[order[begin].second];
@@ -508,42 +513,71 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                 }
             });
             const std::size_t ns = near.x.size();
-            bins.resize(ns), nearest.resize(ns), share.resize(ns), factor.resize(ns), along.resize(ns);
+            bins.resize(ns), share.resize(ns), channels.resize(ns);
+            // Bounding boxes of runs of kChunk samples (close together in Morton order): a
+            // point skips the runs wholly beyond its reach, about half of the group's list.
+            const std::size_t numChunks = (ns + kChunk - 1) / kChunk;
+            chunkBox.resize(numChunks);
+            for (std::size_t c = 0; c < numChunks; ++c) {
+                auto& box = chunkBox[c];
+                box = {near.x[c * kChunk], near.y[c * kChunk], near.z[c * kChunk],
+                       near.x[c * kChunk], near.y[c * kChunk], near.z[c * kChunk]};
+                for (std::size_t k = c * kChunk; k < std::min(ns, (c + 1) * kChunk); ++k) {
+                    box[0] = std::min(box[0], near.x[k]), box[3] = std::max(box[3], near.x[k]);
+                    box[1] = std::min(box[1], near.y[k]), box[4] = std::max(box[4], near.y[k]);
+                    box[2] = std::min(box[2], near.z[k]), box[5] = std::max(box[5], near.z[k]);
+                }
+            }
             for (std::size_t q = begin; q < end; ++q) {
                 const std::uint32_t i = order[q].second;
                 if (skip[i]) continue;
-                binSamples(ns, near.x.data(), near.y.data(), near.z.data(), near.t[0].data(), near.t[1].data(),
-                           near.t[2].data(), near.t[3].data(), near.t[4].data(), near.t[5].data(),
-                           near.c[0].data(), near.c[1].data(), near.c[2].data(), near.c[3].data(),
-                           near.c[4].data(), near.c[5].data(), float(points[i].x - ox),
-                           float(points[i].y - oy), float(points[i].z - oz), float(reach2),
-                           float(1.0 / kernel.bin), float(0.5 * h), numBins, bins.data(), nearest.data(),
-                           share.data(), factor.data(), along.data());
-                std::fill(hist.begin(), hist.end(), 0.0f);
-                for (std::size_t s = 0; s < ns; ++s) {
-                    if (bins[s] == numBins) continue;  // beyond reach
-                    float* at = hist.data() + kChannels * std::size_t(bins[s]);
-                    const float a = near.a[s], ag = a * factor[s], w = share[s];
-                    at[0] += a - a * w;  // bin b
-                    at[1] += ag - ag * w;
-                    at[kChannels] += a * w;  // bin b + 1
-                    at[kChannels + 1] += ag * w;
-                    float* to = hist.data() + kChannels * std::size_t(nearest[s]);
-                    to[2] += a * along[s];  // nearest bin
-                    to[3] += ag * along[s];
+                const float px = float(points[i].x - ox), py = float(points[i].y - oy), pz = float(points[i].z - oz);
+                // A run is skipped only if its box lies beyond reach with a margin against
+                // rounding: the samples binned, and their order, are those of the whole list.
+                const auto beyondReach = [&](std::size_t c) {
+                    const auto& box = chunkBox[c];
+                    const float bx = std::max({0.0f, box[0] - px, px - box[3]}),
+                                by = std::max({0.0f, box[1] - py, py - box[4]}),
+                                bz = std::max({0.0f, box[2] - pz, pz - box[5]});
+                    return bx * bx + by * by + bz * bz > 1.001f * float(reach2);
+                };
+                std::fill(hist.begin(), hist.end(), Channels{});
+                for (std::size_t c = 0; c < numChunks;) {
+                    if (beyondReach(c)) {
+                        ++c;
+                        continue;
+                    }
+                    const std::size_t first = c * kChunk;
+                    while (c < numChunks && !beyondReach(c)) ++c;
+                    const std::size_t count = std::min(ns, c * kChunk) - first;
+                    binSamples(count, near.x.data() + first, near.y.data() + first, near.z.data() + first,
+                               near.a.data() + first, near.t[0].data() + first, near.t[1].data() + first,
+                               near.t[2].data() + first, near.t[3].data() + first, near.t[4].data() + first,
+                               near.t[5].data() + first, near.c[0].data() + first, near.c[1].data() + first,
+                               near.c[2].data() + first, near.c[3].data() + first, near.c[4].data() + first,
+                               near.c[5].data() + first, px, py, pz, float(reach2), float(1.0 / kernel.bin),
+                               float(0.5 * h), numBins, bins.data(), share.data(),
+                               reinterpret_cast<float*>(channels.data()));
+                    for (std::size_t s = 0; s < count; ++s) {
+                        if (bins[s] == numBins) continue;  // beyond reach
+                        Channels* at = hist.data() + bins[s];
+                        const Channels v = channels[s], vw = v * share[s];
+                        at[0] += v - vw;  // bin b
+                        at[1] += vw;      // bin b + 1
+                    }
                 }
                 double inside = 0;  // area of the bins below `counted`
                 int counted = 0;
                 for (int k = 0; k < nr; ++k) {
                     const auto [firstP, lastP] = kernel.patchBins[std::size_t(k)];
                     if (firstP < counted) inside = 0, counted = 0;  // not expected: radii ascend
-                    for (; counted < firstP; ++counted) inside += double(hist[kChannels * std::size_t(counted)]);
+                    for (; counted < firstP; ++counted) inside += double(hist[std::size_t(counted)][0]);
                     // Bins [firstP, lastP) hold the kernel's support for P and L alike; in
                     // pairs of bins, 8 lanes: P in the even ones, L in the odd ones.
                     const float* wk = kernel.weights.data() + std::size_t(k) * kChannels * kernel.numBins;
                     float lane[8] = {};
                     for (std::size_t e = kChannels * std::size_t(firstP); e < kChannels * std::size_t(lastP); e += 8)
-                        for (std::size_t u = 0; u < 8; ++u) lane[u] += hist[e + u] * wk[e + u];
+                        for (std::size_t u = 0; u < 8; ++u) lane[u] += histFloats[e + u] * wk[e + u];
                     const double sumP = inside + double(lane[0] + lane[2]) + double(lane[4] + lane[6]);
                     const double sumL = double(lane[1] + lane[3]) + double(lane[5] + lane[7]);
                     outP[std::size_t(k) * n + i] = float(sumP);
