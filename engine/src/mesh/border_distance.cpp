@@ -61,22 +61,39 @@ std::vector<double> borderDistance(const TriMesh& mesh,
         return std::abs(a[0]) + std::abs(a[1]) + std::abs(a[2]) < std::abs(b[0]) + std::abs(b[1]) + std::abs(b[2]);
     });
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.numVertices()), [&](const auto& r) {
+        // The 27 cells' edge lists, looked up once per run of vertices in the same cell
+        // (neighbouring indices mostly are; most cells have no border edge near them).
+        std::array<const std::vector<std::uint32_t>*, 27> lists{};
+        std::int64_t listed[3] = {0, 0, 0};
+        bool any = false, valid = false;
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             const Vec3& p = mesh.points[i];
             const std::int64_t c[3] = {cellOf(p.x), cellOf(p.y), cellOf(p.z)};
+            if (!valid || c[0] != listed[0] || c[1] != listed[1] || c[2] != listed[2]) {
+                any = false;
+                for (std::size_t k = 0; k < order.size(); ++k) {
+                    const auto& o = order[k];
+                    const auto it = grid.find(cellKey(c[0] + o[0], c[1] + o[1], c[2] + o[2]));
+                    lists[k] = it == grid.end() ? nullptr : &it->second;
+                    any = any || lists[k];
+                }
+                std::copy(c, c + 3, listed);
+                valid = true;
+            }
+            if (!any) continue;  // result[i] = cap
             const double at[3] = {p.x, p.y, p.z};
             double best2 = cap * cap;
-            for (const auto& o : order) {
+            for (std::size_t k = 0; k < order.size(); ++k) {
+                if (!lists[k]) continue;
                 // Squared distance from p to the neighbour cell's box.
+                const auto& o = order[k];
                 double box2 = 0;
-                for (int k = 0; k < 3; ++k) {
-                    const double lo = double(c[k] + o[k]) * cell, gap = o[k] < 0 ? at[k] - (lo + cell) : lo - at[k];
-                    if (o[k] != 0 && gap > 0) box2 += gap * gap;
+                for (int a = 0; a < 3; ++a) {
+                    const double lo = double(c[a] + o[a]) * cell, gap = o[a] < 0 ? at[a] - (lo + cell) : lo - at[a];
+                    if (o[a] != 0 && gap > 0) box2 += gap * gap;
                 }
                 if (box2 >= best2) continue;
-                const auto it = grid.find(cellKey(c[0] + o[0], c[1] + o[1], c[2] + o[2]));
-                if (it == grid.end()) continue;
-                for (auto e : it->second)
+                for (auto e : *lists[k])
                     best2 = std::min(best2, pointSegmentDistance2(p, mesh.points[borderEdges[e][0]],
                                                                   mesh.points[borderEdges[e][1]]));
             }
