@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <limits>
 #include <unordered_map>
 #include <vector>
 
@@ -42,17 +43,27 @@ std::vector<double> borderDistance(const TriMesh& mesh,
     // the 27 cells around a vertex hold every edge closer than cap.
     const double cell = cap;
     const auto cellOf = [&](double v) { return std::int64_t(std::floor(v / cell)); };
-    std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> grid;
+    struct Cell {
+        std::vector<std::uint32_t> edges;
+        Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                std::numeric_limits<double>::infinity()};
+        Vec3 hi = -lo;  // the bounding box of the edges (tighter than the cell)
+    };
+    std::unordered_map<std::uint64_t, Cell> grid;
     for (std::size_t e = 0; e < borderEdges.size(); ++e) {
         const Vec3& a = mesh.points[borderEdges[e][0]];
         const Vec3& b = mesh.points[borderEdges[e][1]];
         for (auto x = cellOf(std::min(a.x, b.x)); x <= cellOf(std::max(a.x, b.x)); ++x)
             for (auto y = cellOf(std::min(a.y, b.y)); y <= cellOf(std::max(a.y, b.y)); ++y)
-                for (auto z = cellOf(std::min(a.z, b.z)); z <= cellOf(std::max(a.z, b.z)); ++z)
-                    grid[cellKey(x, y, z)].push_back(std::uint32_t(e));
+                for (auto z = cellOf(std::min(a.z, b.z)); z <= cellOf(std::max(a.z, b.z)); ++z) {
+                    Cell& c = grid[cellKey(x, y, z)];
+                    c.edges.push_back(std::uint32_t(e));
+                    c.lo = Vec3(std::min({c.lo.x, a.x, b.x}), std::min({c.lo.y, a.y, b.y}), std::min({c.lo.z, a.z, b.z}));
+                    c.hi = Vec3(std::max({c.hi.x, a.x, b.x}), std::max({c.hi.y, a.y, b.y}), std::max({c.hi.z, a.z, b.z}));
+                }
     }
-    // Per vertex: its own cell first, then the neighbours whose box is nearer than the
-    // nearest edge so far; squared distances, one square root at the end (the same value).
+    // Per vertex: its own cell first, then the neighbours whose edges' box is nearer than
+    // the nearest edge so far; squared distances, one square root at the end (the same value).
     std::vector<std::array<std::int64_t, 3>> order;  // the 27 cells, fewest offset axes first
     for (std::int64_t dx = -1; dx <= 1; ++dx)
         for (std::int64_t dy = -1; dy <= 1; ++dy)
@@ -63,7 +74,7 @@ std::vector<double> borderDistance(const TriMesh& mesh,
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.numVertices()), [&](const auto& r) {
         // The 27 cells' edge lists, looked up once per run of vertices in the same cell
         // (neighbouring indices mostly are; most cells have no border edge near them).
-        std::array<const std::vector<std::uint32_t>*, 27> lists{};
+        std::array<const Cell*, 27> lists{};
         std::int64_t listed[3] = {0, 0, 0};
         bool any = false, valid = false;
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
@@ -81,19 +92,16 @@ std::vector<double> borderDistance(const TriMesh& mesh,
                 valid = true;
             }
             if (!any) continue;  // result[i] = cap
-            const double at[3] = {p.x, p.y, p.z};
             double best2 = cap * cap;
             for (std::size_t k = 0; k < order.size(); ++k) {
                 if (!lists[k]) continue;
-                // Squared distance from p to the neighbour cell's box.
-                const auto& o = order[k];
-                double box2 = 0;
-                for (int a = 0; a < 3; ++a) {
-                    const double lo = double(c[a] + o[a]) * cell, gap = o[a] < 0 ? at[a] - (lo + cell) : lo - at[a];
-                    if (o[a] != 0 && gap > 0) box2 += gap * gap;
-                }
-                if (box2 >= best2) continue;
-                for (auto e : *lists[k])
+                // Squared distance from p to the box of the cell's edges.
+                const Cell& near = *lists[k];
+                const double bx = std::max({0.0, near.lo.x - p.x, p.x - near.hi.x}),
+                             by = std::max({0.0, near.lo.y - p.y, p.y - near.hi.y}),
+                             bz = std::max({0.0, near.lo.z - p.z, p.z - near.hi.z});
+                if (bx * bx + by * by + bz * bz >= best2) continue;
+                for (auto e : near.edges)
                     best2 = std::min(best2, pointSegmentDistance2(p, mesh.points[borderEdges[e][0]],
                                                                   mesh.points[borderEdges[e][1]]));
             }
