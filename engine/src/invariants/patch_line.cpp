@@ -138,7 +138,19 @@ std::vector<std::size_t> runAlignedChunks(std::size_t n, std::size_t chunks, Key
     return start;
 }
 
-std::vector<SampleSums> finestSamples(const TriMesh& mesh, double h0)
+/// Samples in parts: runs of samples sorted by key, each part holding whole cells of the
+/// coarsest level, so that every level can be built from the parts in parallel.
+using SampleParts = std::vector<std::vector<SampleSums>>;
+
+std::size_t totalSize(const SampleParts& parts)
+{
+    std::size_t total = 0;
+    for (const auto& part : parts) total += part.size();
+    return total;
+}
+
+/// The finest samples, in parts aligned to cells of level @p coarsestLevel.
+SampleParts finestSamples(const TriMesh& mesh, double h0, int coarsestLevel)
 {
     const std::size_t nt = mesh.numTriangles();
     std::vector<std::uint64_t> first(nt + 1, 0);
@@ -175,9 +187,12 @@ std::vector<SampleSums> finestSamples(const TriMesh& mesh, double h0)
         return a.key != b.key ? a.key < b.key : a.triangle != b.triangle ? a.triangle < b.triangle : a.sub < b.sub;
     });
 
-    // One sample per run of equal keys; chunks aligned to runs keep the sums deterministic.
-    const auto chunks = runAlignedChunks(pieces.size(), 256, [&](std::size_t i) { return pieces[i].key; });
-    std::vector<std::vector<SampleSums>> parts(chunks.size() - 1);
+    // One sample per run of equal keys; chunks aligned to runs (of coarsest cells) keep the
+    // sums deterministic.
+    const int alignBits = 3 * coarsestLevel;
+    const auto chunks =
+        runAlignedChunks(pieces.size(), 256, [&](std::size_t i) { return pieces[i].key >> alignBits; });
+    SampleParts parts(chunks.size() - 1);
     tbb::parallel_for(std::size_t(0), parts.size(), [&](std::size_t c) {
         auto& out = parts[c];
         for (std::size_t i = chunks[c]; i < chunks[c + 1]; ++i) {
@@ -209,59 +224,60 @@ std::vector<SampleSums> finestSamples(const TriMesh& mesh, double h0)
             }
         }
     });
-    // Joined with each part freed as it goes, and the pieces freed first: the samples are
-    // the largest allocation of P and L, so they are held about once, not twice.
-    std::vector<Piece>().swap(pieces);
-    std::size_t total = 0;
-    for (const auto& part : parts) total += part.size();
-    std::vector<SampleSums> samples;
-    samples.reserve(total);
-    for (auto& part : parts) {
-        samples.insert(samples.end(), part.begin(), part.end());
-        std::vector<SampleSums>().swap(part);
-    }
-    return samples;
+    return parts;
 }
 
-std::vector<SampleSums> coarser(const std::vector<SampleSums>& fine)
+/// The samples of the next coarser level: 2×2×2 cells merged exactly, part by part.
+SampleParts coarser(const SampleParts& fine)
 {
-    std::vector<SampleSums> out;
-    for (const SampleSums& s : fine) {
-        const std::uint64_t key = s.key >> 3;
-        if (out.empty() || out.back().key != key) out.push_back(SampleSums{key, 0, {}, {}, {}, s.origin});
-        SampleSums& c = out.back();
-        addSecondMoment(c, s);
-        c.area += s.area;
-        c.moment += s.moment;
-        for (std::size_t q = 0; q < 6; ++q) c.normalTensor[q] += s.normalTensor[q];
-    }
-    return out;
+    SampleParts coarse(fine.size());
+    tbb::parallel_for(std::size_t(0), fine.size(), [&](std::size_t c) {
+        auto& out = coarse[c];
+        std::size_t count = 0;
+        for (std::size_t i = 0; i < fine[c].size(); ++i) count += i == 0 || (fine[c][i].key >> 3) != (fine[c][i - 1].key >> 3);
+        out.reserve(count);
+        for (const SampleSums& s : fine[c]) {
+            const std::uint64_t key = s.key >> 3;
+            if (out.empty() || out.back().key != key) out.push_back(SampleSums{key, 0, {}, {}, {}, s.origin});
+            SampleSums& to = out.back();
+            addSecondMoment(to, s);
+            to.area += s.area;
+            to.moment += s.moment;
+            for (std::size_t q = 0; q < 6; ++q) to.normalTensor[q] += s.normalTensor[q];
+        }
+    });
+    return coarse;
 }
 
-Level makeLevel(const std::vector<SampleSums>& sums, double h0, int index)
+Level makeLevel(const SampleParts& parts, double h0, int index)
 {
     Level level;
     level.index = index;
     level.h = h0 * double(1 << index);
-    const std::size_t n = sums.size();
+    const std::size_t n = totalSize(parts);
     level.key.resize(n);
     level.cx.resize(n), level.cy.resize(n), level.cz.resize(n);
     level.area.resize(n);
     for (auto& t : level.tensor) t.resize(n);
     for (auto& t : level.covariance) t.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        const SampleSums& s = sums[i];
-        level.key[i] = s.key;
-        const Vec3 c = s.area > 0 ? s.moment / s.area : Vec3();
-        level.cx[i] = c.x, level.cy[i] = c.y, level.cz[i] = c.z;
-        level.area[i] = float(s.area);
-        const Vec3 v = c - s.origin;  // covariance = S/a − v vᵀ about the origin o
-        const auto cc = outer(v, v);
-        for (std::size_t q = 0; q < 6; ++q) {
-            level.tensor[q][i] = s.area > 0 ? float(s.normalTensor[q] / s.area) : 0.0f;
-            level.covariance[q][i] = s.area > 0 ? float(s.secondMoment[q] / s.area - cc[q]) : 0.0f;
+    std::vector<std::size_t> first(parts.size() + 1, 0);
+    for (std::size_t c = 0; c < parts.size(); ++c) first[c + 1] = first[c] + parts[c].size();
+    tbb::parallel_for(std::size_t(0), parts.size(), [&](std::size_t c) {
+        for (std::size_t k = 0; k < parts[c].size(); ++k) {
+            const SampleSums& s = parts[c][k];
+            const std::size_t i = first[c] + k;
+            level.key[i] = s.key;
+            const Vec3 m = s.area > 0 ? s.moment / s.area : Vec3();
+            level.cx[i] = m.x, level.cy[i] = m.y, level.cz[i] = m.z;
+            level.area[i] = float(s.area);
+            const Vec3 v = m - s.origin;  // covariance = S/a − v vᵀ about the origin o
+            const auto cc = outer(v, v);
+            for (std::size_t q = 0; q < 6; ++q) {
+                level.tensor[q][i] = s.area > 0 ? float(s.normalTensor[q] / s.area) : 0.0f;
+                level.covariance[q][i] = s.area > 0 ? float(s.secondMoment[q] / s.area - cc[q]) : 0.0f;
+            }
         }
-    }
+    });
     for (std::size_t i = 0; i < n;) {
         std::size_t e = i;
         while (e < n && (level.key[e] >> 9) == (level.key[i] >> 9)) ++e;
@@ -736,8 +752,8 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
     Stopwatch stage;
     std::vector<Level> levels;
     {
-        std::vector<SampleSums> sums = finestSamples(mesh, h0);
-        result.numSamples = sums.size();
+        SampleParts sums = finestSamples(mesh, h0, numLevels - 1);
+        result.numSamples = totalSize(sums);
         for (int l = 0; l < numLevels; ++l) {
             if (l > 0) sums = coarser(sums);
             levels.push_back(makeLevel(sums, h0, l));
