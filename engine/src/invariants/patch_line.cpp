@@ -475,7 +475,9 @@ CellGroups groupByCells(const std::vector<Vec3>& points, double h0, int l, int g
 /// f′ term is the shift of the mean distance, d + s/2, where the sample is binned; the f″
 /// term goes into channels of its own.
 /// Points whose @p skip is set are left alone. Points go in groups of 2^kGroupBits cells per
-/// axis that share one gathered list of nearby samples.
+/// axis that share one gathered list of nearby samples; each point bins the runs of kChunk
+/// samples of the list whose bounding box comes within its reach (about 4/5 of the list on
+/// the finest level of the benchmark surface, of which 2/3 lie within reach).
 void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                     const std::vector<Vec3>& points, const std::vector<char>& skip,
                     std::vector<float>& outP, std::vector<float>& outL, Progress* progress)
