@@ -7,8 +7,10 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -23,9 +25,10 @@ namespace msii {
 namespace {
 
 /// Records per chunk: each chunk is formatted independently (in parallel), then chunks are
-/// written in order, a batch at a time so the memory held stays bounded.
+/// written in order, a batch at a time so the memory held stays bounded; the next batch is
+/// formatted while one is written.
 constexpr std::size_t kChunkRecords = std::size_t(1) << 15;
-constexpr std::size_t kChunksPerBatch = 16;
+constexpr std::size_t kChunksPerBatch = 8;
 
 using Buffer = std::vector<char>;
 
@@ -35,15 +38,30 @@ template <class Fill>
 void writeInChunks(AtomicFile& file, std::size_t count, const Fill& fill)
 {
     const std::size_t numChunks = (count + kChunkRecords - 1) / kChunkRecords;
-    std::vector<Buffer> buffers(std::min(numChunks, kChunksPerBatch));
-    for (std::size_t first = 0; first < numChunks; first += kChunksPerBatch) {
-        const std::size_t last = std::min(numChunks, first + kChunksPerBatch);
+    const std::size_t numBatches = (numChunks + kChunksPerBatch - 1) / kChunksPerBatch;
+    if (numBatches == 0) return;
+    std::array<std::vector<Buffer>, 2> buffers;  // batch b in buffers[b % 2]
+    const auto format = [&](std::size_t batch) {
+        const std::size_t first = batch * kChunksPerBatch, last = std::min(numChunks, first + kChunksPerBatch);
+        std::vector<Buffer>& set = buffers[batch % 2];
+        set.resize(last - first);
         tbb::parallel_for(first, last, [&](std::size_t c) {
-            Buffer& buffer = buffers[c - first];
+            Buffer& buffer = set[c - first];
             buffer.clear();
             fill(c * kChunkRecords, std::min(count, (c + 1) * kChunkRecords), buffer);
         });
-        for (std::size_t c = first; c < last; ++c) file.write(buffers[c - first].data(), buffers[c - first].size());
+    };
+    format(0);
+    for (std::size_t batch = 0; batch < numBatches; ++batch) {
+        tbb::task_group next;
+        if (batch + 1 < numBatches) next.run([&format, batch] { format(batch + 1); });
+        try {
+            for (const Buffer& buffer : buffers[batch % 2]) file.write(buffer.data(), buffer.size());
+        } catch (...) {
+            next.wait();  // the task uses the buffers: let it finish before they go
+            throw;
+        }
+        next.wait();
     }
 }
 
