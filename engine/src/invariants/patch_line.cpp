@@ -13,6 +13,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <unordered_map>
 
@@ -352,6 +353,14 @@ constexpr int kBinsPerCell = 8;
 constexpr std::size_t kChannels = 4;
 typedef float Channels __attribute__((vector_size(16)));
 
+/// The 4 floats at @p from as one vector (an unaligned load, without aliasing floats).
+inline Channels loadChannels(const float* from)
+{
+    Channels v;
+    std::memcpy(&v, from, sizeof(v));
+    return v;
+}
+
 /// For @p n samples seen from p (coordinates relative to p): the histogram bin of the
 /// sample's mean distance d + (tr C − q)/(2d) (d = |x − p| at the centroid, with d at least
 /// @p minDistance in the correction), shared linearly between the two nearest bin centres
@@ -500,10 +509,9 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
         Gathered near;
         std::vector<std::int32_t> bins;
         std::vector<float> share;
-        std::vector<Channels> channels;
+        std::vector<float> channels;  // kChannels per sample
         std::vector<std::array<float, 6>> chunkBox;  // min x, y, z, max x, y, z
         std::vector<Channels> hist(static_cast<std::size_t>(numBins) + 1);
-        const float* histFloats = reinterpret_cast<const float*>(hist.data());
         for (std::size_t g = range.begin(); g < range.end(); ++g) {
             const std::size_t begin = groupStart[g], end = groupStart[g + 1];
             const CellCoord& c0 = cell[order[begin].second];
@@ -531,9 +539,9 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                 }
             });
             const std::size_t ns = near.x.size();
-            bins.resize(ns), share.resize(ns), channels.resize(ns);
+            bins.resize(ns), share.resize(ns), channels.resize(kChannels * ns);
             // Bounding boxes of runs of kChunk samples (close together in Morton order): a
-            // point skips the runs wholly beyond its reach, about half of the group's list.
+            // point skips the runs wholly beyond its reach (about a fifth of the list).
             const std::size_t numChunks = (ns + kChunk - 1) / kChunk;
             chunkBox.resize(numChunks);
             for (std::size_t c = 0; c < numChunks; ++c) {
@@ -575,11 +583,11 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                                near.c[2].data() + first, near.c[3].data() + first, near.c[4].data() + first,
                                near.c[5].data() + first, px, py, pz, float(reach2), float(1.0 / kernel.bin),
                                float(0.5 * h), numBins, bins.data(), share.data(),
-                               reinterpret_cast<float*>(channels.data()));
+                               channels.data());
                     for (std::size_t s = 0; s < count; ++s) {
                         if (bins[s] == numBins) continue;  // beyond reach
                         Channels* at = hist.data() + bins[s];
-                        const Channels v = channels[s], vw = v * share[s];
+                        const Channels v = loadChannels(channels.data() + kChannels * s), vw = v * share[s];
                         at[0] += v - vw;  // bin b
                         at[1] += vw;      // bin b + 1
                     }
@@ -591,13 +599,15 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                     if (firstP < counted) inside = 0, counted = 0;  // not expected: radii ascend
                     for (; counted < firstP; ++counted) inside += double(hist[std::size_t(counted)][0]);
                     // Bins [firstP, lastP) hold the kernel's support for P and L alike; in
-                    // pairs of bins, 8 lanes: P in the even ones, L in the odd ones.
+                    // pairs of bins: P in the channels 0 and 2, L in 1 and 3.
                     const float* wk = kernel.weights.data() + std::size_t(k) * kChannels * kernel.numBins;
-                    float lane[8] = {};
-                    for (std::size_t e = kChannels * std::size_t(firstP); e < kChannels * std::size_t(lastP); e += 8)
-                        for (std::size_t u = 0; u < 8; ++u) lane[u] += histFloats[e + u] * wk[e + u];
-                    const double sumP = inside + double(lane[0] + lane[2]) + double(lane[4] + lane[6]);
-                    const double sumL = double(lane[1] + lane[3]) + double(lane[5] + lane[7]);
+                    Channels even{}, odd{};
+                    for (int b = firstP; b < lastP; b += 2) {
+                        even += hist[std::size_t(b)] * loadChannels(wk + kChannels * std::size_t(b));
+                        odd += hist[std::size_t(b) + 1] * loadChannels(wk + kChannels * (std::size_t(b) + 1));
+                    }
+                    const double sumP = inside + double(even[0] + even[2]) + double(odd[0] + odd[2]);
+                    const double sumL = double(even[1] + even[3]) + double(odd[1] + odd[3]);
                     outP[std::size_t(k) * n + i] = float(sumP);
                     outL[std::size_t(k) * n + i] = float(sumL);
                 }
