@@ -183,11 +183,13 @@ TEST(WritePly, MissingFolderIsIOError)
     }
 }
 
+// More than two batches of records (8 chunks of 32768 per batch) for vertices and faces, so
+// that the next batch is formatted while one is written.
 TEST(WritePly, LargeMeshWithManyPropertiesRoundTrips)
 {
     TempDir dir;
     TriMesh mesh;
-    const std::uint32_t n = 200000;
+    const std::uint32_t n = 600000;
     for (std::uint32_t i = 0; i < n; ++i) mesh.points.push_back({float(i) * 0.25f, float(i % 97), -float(i % 13)});
     for (std::uint32_t i = 0; i + 2 < n; ++i) mesh.triangles.push_back({i, i + 1, i + 2});
     std::vector<VertexProperty> properties;
