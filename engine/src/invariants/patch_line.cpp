@@ -124,6 +124,15 @@ inline int piecesPerSide(const std::array<Vec3, 3>& t, double h0)
     return std::max(1, int(std::ceil(longest / h0)));
 }
 
+/// Squared distance from (x, y, z) to the box {lo x, y, z, hi x, y, z} (0 inside it).
+template <class T>
+inline T squaredDistanceToBox(T x, T y, T z, const std::array<T, 6>& box)
+{
+    const T dx = std::max({T(0), box[0] - x, x - box[3]}), dy = std::max({T(0), box[1] - y, y - box[4]}),
+            dz = std::max({T(0), box[2] - z, z - box[5]});
+    return dx * dx + dy * dy + dz * dz;
+}
+
 /// Runs of equal keys in a sorted range, for parallel reduction: chunk starts moved forward
 /// to the beginning of a run.
 template <class KeyAt>
@@ -234,8 +243,9 @@ SampleParts coarser(const SampleParts& fine)
     SampleParts coarse(fine.size());
     tbb::parallel_for(std::size_t(0), fine.size(), [&](std::size_t c) {
         auto& out = coarse[c];
-        std::size_t count = 0;
-        for (std::size_t i = 0; i < fine[c].size(); ++i) count += i == 0 || (fine[c][i].key >> 3) != (fine[c][i - 1].key >> 3);
+        std::size_t count = 0;  // parents, to allocate once
+        for (std::size_t i = 0; i < fine[c].size(); ++i)
+            count += i == 0 || (fine[c][i].key >> 3) != (fine[c][i - 1].key >> 3);
         out.reserve(count);
         for (const SampleSums& s : fine[c]) {
             const std::uint64_t key = s.key >> 3;
@@ -255,14 +265,14 @@ Level makeLevel(const SampleParts& parts, double h0, int index)
     Level level;
     level.index = index;
     level.h = h0 * double(1 << index);
-    const std::size_t n = totalSize(parts);
+    std::vector<std::size_t> first(parts.size() + 1, 0);  // each part's first sample
+    for (std::size_t c = 0; c < parts.size(); ++c) first[c + 1] = first[c] + parts[c].size();
+    const std::size_t n = first.back();
     level.key.resize(n);
     level.cx.resize(n), level.cy.resize(n), level.cz.resize(n);
     level.area.resize(n);
     for (auto& t : level.tensor) t.resize(n);
     for (auto& t : level.covariance) t.resize(n);
-    std::vector<std::size_t> first(parts.size() + 1, 0);
-    for (std::size_t c = 0; c < parts.size(); ++c) first[c + 1] = first[c] + parts[c].size();
     tbb::parallel_for(std::size_t(0), parts.size(), [&](std::size_t c) {
         for (std::size_t k = 0; k < parts[c].size(); ++k) {
             const SampleSums& s = parts[c][k];
@@ -504,6 +514,10 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
     const int reachCells = kernel.reachCells, numBins = kernel.numBins, nr = kernel.numRadii;
     const std::int64_t groupCells = std::int64_t(1) << kGroupBits;
     const double groupSide = double(groupCells) * h, reach2 = kernel.reach * kernel.reach;
+    const std::array<double, 6> groupBox{0, 0, 0, groupSide, groupSide, groupSide};  // about (ox, oy, oz)
+    // A run of samples is skipped only if its box lies beyond reach with a margin against
+    // rounding: the samples binned, and their order, are those of the whole list.
+    const float skipBeyond2 = 1.001f * float(reach2);
     if (progress) progress->start("P and L, level " + std::to_string(l), groupStart.size() - 1);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groupStart.size() - 1), [&](const auto& range) {
         Gathered near;
@@ -526,9 +540,7 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                 // Only samples within reach of the group's box [0, groupSide)³ (the blocks
                 // bring more).
                 const double x = level.cx[s] - ox, y = level.cy[s] - oy, z = level.cz[s] - oz;
-                const double bx = std::max({0.0, -x, x - groupSide}), by = std::max({0.0, -y, y - groupSide}),
-                             bz = std::max({0.0, -z, z - groupSide});
-                if (bx * bx + by * by + bz * bz >= reach2) return;
+                if (squaredDistanceToBox(x, y, z, groupBox) >= reach2) return;
                 near.x.push_back(float(x));
                 near.y.push_back(float(y));
                 near.z.push_back(float(z));
@@ -558,21 +570,14 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                 const std::uint32_t i = order[q].second;
                 if (skip[i]) continue;
                 const float px = float(points[i].x - ox), py = float(points[i].y - oy), pz = float(points[i].z - oz);
-                // A run is skipped only if its box lies beyond reach with a margin against
-                // rounding: the samples binned, and their order, are those of the whole list.
                 const auto beyondReach = [&](std::size_t c) {
-                    const auto& box = chunkBox[c];
-                    const float bx = std::max({0.0f, box[0] - px, px - box[3]}),
-                                by = std::max({0.0f, box[1] - py, py - box[4]}),
-                                bz = std::max({0.0f, box[2] - pz, pz - box[5]});
-                    return bx * bx + by * by + bz * bz > 1.001f * float(reach2);
+                    return squaredDistanceToBox(px, py, pz, chunkBox[c]) > skipBeyond2;
                 };
                 std::fill(hist.begin(), hist.end(), Channels{});
-                for (std::size_t c = 0; c < numChunks;) {
-                    if (beyondReach(c)) {
-                        ++c;
-                        continue;
-                    }
+                // Runs of consecutive chunks within reach; the chunk that ends a run is
+                // beyond it and is stepped over (c + 1) without a second test.
+                for (std::size_t c = 0; c < numChunks; ++c) {
+                    if (beyondReach(c)) continue;
                     const std::size_t first = c * kChunk;
                     while (c < numChunks && !beyondReach(c)) ++c;
                     const std::size_t count = std::min(ns, c * kChunk) - first;
@@ -645,6 +650,7 @@ void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec
     const CellGroups groups = groupByCells(p, h0, level.index, kFitGroupBits);
     const std::int64_t groupCells = std::int64_t(1) << kFitGroupBits;
     const double groupSide = double(groupCells) * h;
+    const std::array<double, 6> groupBox{0, 0, 0, groupSide, groupSide, groupSide};  // about (ox, oy, oz)
     const auto& order = groups.order;
     const auto& groupStart = groups.start;
 
@@ -668,10 +674,8 @@ void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec
                          oy = double(gy - (kOffset >> level.index)) * h,
                          oz = double(gz - (kOffset >> level.index)) * h;
             forEachSampleInCells(level, lo, hi, [&](std::uint32_t s) {
-                const double x = level.cx[s] - ox, y = level.cy[s] - oy, z = level.cz[s] - oz;
-                const double bx = std::max({0.0, -x, x - groupSide}), by = std::max({0.0, -y, y - groupSide}),
-                             bz = std::max({0.0, -z, z - groupSide});
-                if (bx * bx + by * by + bz * bz < radius2) near.push_back(s);
+                if (squaredDistanceToBox(level.cx[s] - ox, level.cy[s] - oy, level.cz[s] - oz, groupBox) < radius2)
+                    near.push_back(s);
             });
             nearX.resize(near.size()), nearY.resize(near.size()), nearZ.resize(near.size());
             for (auto& t : nearT) t.resize(near.size());
@@ -785,7 +789,7 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         LevelKernel kernel;
         kernel.bin = level.h / kBinsPerCell;
         kernel.numRadii = int(levelRadii.size());
-        // Kernel knot spacing per radius: kernelCells cells, but at most r/3 so that the
+        // Kernel knot spacing per radius: kKernelCells cells, but at most r/3 so that the
         // kernel stays within d >= 0 (small radii on the finest level).
         const double fullWidth = kKernelCells * level.h;
         std::vector<double> kw(levelRadii.size());

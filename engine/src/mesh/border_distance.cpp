@@ -1,5 +1,7 @@
 #include <msii/mesh/border_distance.h>
 
+#include <msii/mesh/mesh_stats.h>
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -8,7 +10,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
-#include <limits>
 #include <unordered_map>
 #include <vector>
 
@@ -45,9 +46,7 @@ std::vector<double> borderDistance(const TriMesh& mesh,
     const auto cellOf = [&](double v) { return std::int64_t(std::floor(v / cell)); };
     struct Cell {
         std::vector<std::uint32_t> edges;
-        Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-                std::numeric_limits<double>::infinity()};
-        Vec3 hi = -lo;  // the bounding box of the edges (tighter than the cell)
+        BoundingBox box;  // of the edges (tighter than the cell)
     };
     std::unordered_map<std::uint64_t, Cell> grid;
     for (std::size_t e = 0; e < borderEdges.size(); ++e) {
@@ -58,8 +57,8 @@ std::vector<double> borderDistance(const TriMesh& mesh,
                 for (auto z = cellOf(std::min(a.z, b.z)); z <= cellOf(std::max(a.z, b.z)); ++z) {
                     Cell& c = grid[cellKey(x, y, z)];
                     c.edges.push_back(std::uint32_t(e));
-                    c.lo = Vec3(std::min({c.lo.x, a.x, b.x}), std::min({c.lo.y, a.y, b.y}), std::min({c.lo.z, a.z, b.z}));
-                    c.hi = Vec3(std::max({c.hi.x, a.x, b.x}), std::max({c.hi.y, a.y, b.y}), std::max({c.hi.z, a.z, b.z}));
+                    c.box.add(a);
+                    c.box.add(b);
                 }
     }
     // Per vertex: its own cell first, then the neighbours whose edges' box is nearer than
@@ -95,12 +94,8 @@ std::vector<double> borderDistance(const TriMesh& mesh,
             double best2 = cap * cap;
             for (std::size_t k = 0; k < order.size(); ++k) {
                 if (!lists[k]) continue;
-                // Squared distance from p to the box of the cell's edges.
                 const Cell& near = *lists[k];
-                const double bx = std::max({0.0, near.lo.x - p.x, p.x - near.hi.x}),
-                             by = std::max({0.0, near.lo.y - p.y, p.y - near.hi.y}),
-                             bz = std::max({0.0, near.lo.z - p.z, p.z - near.hi.z});
-                if (bx * bx + by * by + bz * bz >= best2) continue;
+                if (near.box.squaredDistance(p) >= best2) continue;
                 for (auto e : near.edges)
                     best2 = std::min(best2, pointSegmentDistance2(p, mesh.points[borderEdges[e][0]],
                                                                   mesh.points[borderEdges[e][1]]));

@@ -15,11 +15,7 @@ BoundingBox boundingBox(const std::vector<Vec3>& points)
         BoundingBox& box = blocks[b];
         for (std::size_t i = begin; i < end; ++i) {
             const Vec3& p = points[i];
-            if (!isFinite(p)) continue;
-            for (int k = 0; k < 3; ++k) {
-                box.min[k] = std::min(box.min[k], p[k]);
-                box.max[k] = std::max(box.max[k], p[k]);
-            }
+            if (isFinite(p)) box.add(p);
         }
     });
     BoundingBox box;

@@ -5,6 +5,7 @@
 
 #include <msii/mesh/trimesh.h>
 
+#include <algorithm>
 #include <limits>
 #include <vector>
 
@@ -29,6 +30,21 @@ struct BoundingBox {
     Vec3 max = -min;
     bool empty() const { return !(min.x <= max.x); }
     double diagonal() const { return empty() ? 0.0 : norm(max - min); }
+    /// Grows the box to hold @p p.
+    void add(const Vec3& p)
+    {
+        for (int k = 0; k < 3; ++k) {
+            min[k] = std::min(min[k], p[k]);
+            max[k] = std::max(max[k], p[k]);
+        }
+    }
+    /// Squared distance from @p p to the box (0 inside it).
+    double squaredDistance(const Vec3& p) const
+    {
+        const double dx = std::max({0.0, min.x - p.x, p.x - max.x}), dy = std::max({0.0, min.y - p.y, p.y - max.y}),
+                     dz = std::max({0.0, min.z - p.z, p.z - max.z});
+        return dx * dx + dy * dy + dz * dz;
+    }
 };
 BoundingBox boundingBox(const std::vector<Vec3>& points);
 
