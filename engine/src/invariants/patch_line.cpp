@@ -363,6 +363,19 @@ constexpr int kBinsPerCell = 8;
 constexpr std::size_t kChannels = 4;
 typedef float Channels __attribute__((vector_size(16)));
 
+/// The kernel's knot spacing at radius r on a level of cell h: kKernelCells cells, but at
+/// most r/3, so that the kernel stays within d >= 0 (small radii on the finest level).
+inline double kernelKnotSpacing(double r, double h)
+{
+    return std::min(kKernelCells * h, r / kKernelHalfSupport);
+}
+
+/// How far from a point a radius's kernel reaches: r + 3w.
+inline double kernelReach(double r, double h)
+{
+    return r + kKernelHalfSupport * kernelKnotSpacing(r, h);
+}
+
 /// The 4 floats at @p from as one vector (an unaligned load, without aliasing floats).
 inline Channels loadChannels(const float* from)
 {
@@ -737,6 +750,21 @@ void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec
 
 } // namespace
 
+std::vector<int> patchLineLevelOfRadius(const std::vector<double>& radii, double h0, double minCellsPerRadius)
+{
+    std::vector<int> level = gridLevelOfRadius(radii, h0, minCellsPerRadius);
+    const std::size_t n = radii.size();
+    if (n < 2 || level[n - 1] == 0 || level[n - 2] != level[n - 1] - 1) return level;
+    // Samples binned on a level of cell h and reach ρ, per unit area: (points ∝ 1/h², its
+    // samples or the vertices if fewer) × (samples within reach ∝ (ρ/h)²). With c = 2h the
+    // coarsest cell, extending the level below from the radius before to r costs
+    // 16 (ρ_h(r)² − ρ_h(r_prev)²) / c⁴, and the coarsest level's own pass ρ_c(r)² / c⁴.
+    const double r = radii[n - 1], below = h0 * std::ldexp(1.0, level[n - 1] - 1);
+    const double extend = 16.0 * (std::pow(kernelReach(r, below), 2) - std::pow(kernelReach(radii[n - 2], below), 2));
+    if (extend <= std::pow(kernelReach(r, 2.0 * below), 2)) --level[n - 1];
+    return level;
+}
+
 PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& options,
                                  Progress* progress)
 {
@@ -758,7 +786,8 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
 
     PatchLineResult result;
     result.radii = radii;
-    result.levelOfRadius = gridLevelOfRadius(radii, h0, options.minCellsPerRadius);
+    const std::vector<int> planLevel = gridLevelOfRadius(radii, h0, options.minCellsPerRadius);
+    result.levelOfRadius = patchLineLevelOfRadius(radii, h0, options.minCellsPerRadius);
     const int numLevels = *std::max_element(result.levelOfRadius.begin(), result.levelOfRadius.end()) + 1;
     const float nan = std::numeric_limits<float>::quiet_NaN();
     if (options.computePatch) result.patch.assign(radii.size(), std::vector<float>(nv, nan));
@@ -789,13 +818,9 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         LevelKernel kernel;
         kernel.bin = level.h / kBinsPerCell;
         kernel.numRadii = int(levelRadii.size());
-        // Kernel knot spacing per radius: kKernelCells cells, but at most r/3 so that the
-        // kernel stays within d >= 0 (small radii on the finest level).
-        const double fullWidth = kKernelCells * level.h;
-        std::vector<double> kw(levelRadii.size());
-        for (std::size_t k = 0; k < kw.size(); ++k)
-            kw[k] = std::min(fullWidth, radii[std::size_t(levelRadii[k])] / kKernelHalfSupport);
-        kernel.reach = radii[std::size_t(levelRadii.back())] + kKernelHalfSupport * kw.back();
+        std::vector<double> kw(levelRadii.size());  // knot spacing per radius
+        for (std::size_t k = 0; k < kw.size(); ++k) kw[k] = kernelKnotSpacing(radii[std::size_t(levelRadii[k])], level.h);
+        kernel.reach = kernelReach(radii[std::size_t(levelRadii.back())], level.h);
         kernel.reachCells = int(std::ceil(kernel.reach / level.h)) + 1;
         kernel.numBins = int(std::ceil(kernel.reach / kernel.bin)) + 2;  // bins beyond reach: 0
         // Weights per radius and bin centre d_b = (b + 1/2)·bin (paper Eq. 2 for P and L as
@@ -828,10 +853,12 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         }
 
         // A value is masked when the kernel's reach, plus the spread of a sample, gets to a
-        // border: r + max(3w, 4h) + 2 h0, so at least where V and S are (r + 4h + 2 h0).
+        // border: r + max(3w, 4h) + 2 h0, with h the cell of the radius's level in the V/S
+        // plan, so at least where V and S are (r + 4h + 2 h0), also for a merged level.
         const auto masked = [&](std::size_t i, std::size_t k) {
+            const std::size_t j = std::size_t(levelRadii[k]);
             return !options.borderDistance.empty() &&
-                   radii[std::size_t(levelRadii[k])] + std::max(kKernelHalfSupport * kw[k], 4.0 * level.h) + 2.0 * h0 >
+                   radii[j] + std::max(kKernelHalfSupport * kw[k], 4.0 * h0 * std::ldexp(1.0, planLevel[j])) + 2.0 * h0 >
                        options.borderDistance[i];
         };
         const auto store = [&](std::size_t i, std::size_t k, double sumP, double sumL) {

@@ -7,7 +7,8 @@
 /// 1. Samples: the triangles are cut into pieces no larger than the finest cell h0, and the
 ///    pieces are gathered per cell into one sample: area, centroid, covariance of position
 ///    and mean normal tensor. Coarser levels (cells 2h0, 4h0, ...) merge 2×2×2 cells exactly.
-/// 2. Each radius uses the level of the V/S plan (gridLevelOfRadius: r/h >= minCellsPerRadius).
+/// 2. Each radius uses the level of the V/S plan (gridLevelOfRadius: r/h >= minCellsPerRadius),
+///    except a coarsest level that would hold a single radius (patchLineLevelOfRadius).
 /// 3. Per point p and level, one pass over the samples within reach builds histograms over
 ///    the distance d = |x − p| of area, and of area·g with g = |∇_M d| = sqrt(1 − (û·n)²)
 ///    (û = (x − p)/d). Then P(r) = Σ a·F((r − d)/w) and, by the coarea formula
@@ -56,6 +57,15 @@ struct PatchLineResult {
     std::size_t directEvaluations = 0;
     double samplingSeconds = 0, gatherSeconds = 0;
 };
+
+/// The sample level of each radius: gridLevelOfRadius, except that a coarsest level
+/// holding a single radius r joins the level below when that costs no more. Its own pass
+/// would reach 2r (kernel knots r/3 at r/h = 6) for one radius; extending the level below
+/// from the radius before reaches only a little further, on 4 times as many points and
+/// samples, and halves the kernel there (r/6): with N = 16 radii this merges whenever the
+/// coarsest level holds R alone, the usual case (1.1M-vertex benchmark, tablet test).
+std::vector<int> patchLineLevelOfRadius(const std::vector<double>& radii, double h0,
+                                        double minCellsPerRadius);
 
 /// Computes P̂ and L̂ for every vertex of @p mesh at every radius.
 /// @throw InvalidInputError if radii are empty, not ascending or not positive, or the cell
