@@ -8,8 +8,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <cstdint>
 #include <filesystem>
 #include <limits>
@@ -311,6 +313,55 @@ TEST(AtomicFile, CommitReplacesTargetAndLeavesNoTemporary)
     }
     EXPECT_EQ(readFile(target), "new content");
     EXPECT_EQ(dir.entries(), std::vector<std::string>{"out.txt"});
+}
+
+// Mode::Large (O_DIRECT blocks of 16 MB written in the background): appends of odd sizes,
+// patches in the part already written, across its end, in the block being filled and
+// beyond the end, and a tail that is not a whole 4 KB give the bytes of an in-memory model,
+// as in Mode::Buffered.
+TEST(AtomicFile, LargeModeGivesTheBytesWritten)
+{
+    TempDir dir;
+    const std::size_t mb = std::size_t(1) << 20;
+    std::vector<char> data(36 * mb + 12345);
+    std::uint32_t state = 12345;
+    for (char& c : data) c = char((state = state * 1664525u + 1013904223u) >> 24);
+    for (const auto mode : {AtomicFile::Mode::Large, AtomicFile::Mode::Buffered}) {
+        const std::string target = dir.file(mode == AtomicFile::Mode::Large ? "large.bin" : "buffered.bin");
+        std::vector<char> model;
+        AtomicFile file(target, mode);
+        if (mode == AtomicFile::Mode::Large)
+            std::printf("Mode::Large in %s: %s\n", dir.path().c_str(),
+                        file.writesDirect() ? "direct writes" : "the file system refuses O_DIRECT: buffered");
+        const auto append = [&](std::size_t from, std::size_t to) {
+            // In uneven pieces, as OpenEXR writes: 4-byte fields and large chunks.
+            for (std::size_t at = from; at < to;) {
+                const std::size_t n = std::min(to - at, at % 3 == 0 ? std::size_t(4) : std::size_t(3 * mb + 7));
+                file.write(data.data() + at, n);
+                model.insert(model.end(), data.begin() + std::ptrdiff_t(at), data.begin() + std::ptrdiff_t(at + n));
+                at += n;
+            }
+            EXPECT_EQ(file.position(), model.size());
+        };
+        const auto patch = [&](std::size_t offset, std::size_t bytes, char value) {
+            const std::vector<char> p(bytes, value);
+            file.writeAt(offset, p.data(), bytes);
+            if (model.size() < offset + bytes) model.resize(offset + bytes);
+            std::fill(model.begin() + std::ptrdiff_t(offset), model.begin() + std::ptrdiff_t(offset + bytes), value);
+        };
+        append(0, 20 * mb);              // the first block is written, 4 MB fill the second
+        patch(100, 1000, 'a');           // written part
+        patch(16 * mb - 500, 1000, 'b');  // across its end
+        patch(18 * mb, 1000, 'c');        // in the block being filled
+        patch(20 * mb + 10, 20, 'd');     // beyond the end: a hole, then overwritten
+        const std::size_t before = model.size();
+        model.resize(20 * mb);
+        append(20 * mb, data.size());
+        ASSERT_GT(model.size(), before);
+        patch(data.size() - 3, 3, 'e');   // in the tail
+        file.commit();
+        EXPECT_TRUE(readFile(target) == std::string(model.begin(), model.end()));
+    }
 }
 
 TEST(AtomicFile, ExceptionBeforeCommitLeavesTargetUntouched)

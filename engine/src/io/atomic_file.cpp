@@ -2,10 +2,15 @@
 
 #include <msii/core/errors.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <condition_variable>
 #include <cstring>
 #include <filesystem>
+#include <mutex>
+#include <thread>
+#include <vector>
 
 #include <csignal>
 #include <cstdlib>
@@ -111,9 +116,175 @@ void unregisterTemporary(int slot)
     if (slot >= 0) std::free(gTemporaries[slot].exchange(nullptr));
 }
 
+/// Writes all of @p bytes at @p offset; 0 or the errno of the failure.
+int pwriteAll(int fd, const char* data, std::size_t bytes, std::uint64_t offset)
+{
+    while (bytes > 0) {
+        const ssize_t done = ::pwrite(fd, data, bytes, off_t(offset));
+        if (done < 0 && errno == EINTR) continue;
+        if (done <= 0) return done < 0 ? errno : EIO;
+        data += done, offset += std::uint64_t(done), bytes -= std::size_t(done);
+    }
+    return 0;
+}
+
 } // namespace
 
-AtomicFile::AtomicFile(const std::string& target) : mTarget(target)
+// ---------------------------------------------------------------------------------------
+// AtomicFile::Mode::Large: appended bytes fill one of two aligned blocks; a full block is
+// handed to a background thread that writes it with O_DIRECT while the other one fills.
+
+class DirectWriter {
+public:
+    static constexpr std::size_t kAlign = 4096;                   // offsets, sizes, addresses
+    static constexpr std::size_t kBlock = std::size_t(16) << 20;  // bytes per write
+
+    /// A writer on a second descriptor of @p path opened with O_DIRECT; nullptr where the
+    /// file system refuses it.
+    static std::unique_ptr<DirectWriter> open(const std::string& path)
+    {
+#ifdef O_DIRECT
+        const int fd = ::open(path.c_str(), O_WRONLY | O_DIRECT | O_CLOEXEC);
+        if (fd < 0) return nullptr;
+        std::unique_ptr<DirectWriter> writer(new DirectWriter(fd));
+        if (!writer->mBuffer[0] || !writer->mBuffer[1]) return nullptr;
+        writer->mThread = std::thread([w = writer.get()] { w->run(); });
+        return writer;
+#else
+        (void)path;
+        return nullptr;
+#endif
+    }
+
+    ~DirectWriter()
+    {
+        if (mThread.joinable()) {
+            {
+                std::lock_guard<std::mutex> lock(mMutex);
+                mStop = true;
+            }
+            mWake.notify_all();
+            mThread.join();
+        }
+        ::close(mFd);
+        for (char* b : mBuffer) std::free(b);
+    }
+
+    /// Appends @p bytes; 0 or the errno of a failed write (this one's or an earlier block's).
+    int append(const char* data, std::size_t bytes)
+    {
+        while (bytes > 0) {
+            const std::size_t n = std::min(bytes, kBlock - mFill);
+            std::memcpy(mBuffer[mCurrent] + mFill, data, n);
+            mFill += n, data += n, bytes -= n;
+            if (mFill == kBlock)
+                if (const int e = submit(kBlock)) return e;
+        }
+        return 0;
+    }
+
+    /// Writes @p bytes at @p offset: the part within the block being filled is changed in
+    /// place, the rest goes through @p bufferedFd once no block is in flight (so that it
+    /// lands after the blocks written before). 0 or an errno.
+    int patch(int bufferedFd, std::uint64_t offset, const char* data, std::size_t bytes)
+    {
+        const std::uint64_t end = offset + bytes, lo = mOffset, hi = mOffset + mFill;
+        if (offset < lo || end > hi)
+            if (const int e = drain()) return e;
+        if (offset < lo)
+            if (const int e = pwriteAll(bufferedFd, data, std::size_t(std::min(end, lo) - offset), offset)) return e;
+        if (offset < hi && end > lo) {
+            const std::uint64_t from = std::max(offset, lo), to = std::min(end, hi);
+            std::memcpy(mBuffer[mCurrent] + (from - lo), data + (from - offset), std::size_t(to - from));
+        }
+        if (end > hi) {
+            const std::uint64_t from = std::max(offset, hi);
+            if (const int e = pwriteAll(bufferedFd, data + (from - offset), std::size_t(end - from), from)) return e;
+        }
+        return 0;
+    }
+
+    /// Writes what is left: the block being filled up to its last whole 4 KB directly, the
+    /// few bytes after that through @p bufferedFd. 0 or an errno.
+    int finish(int bufferedFd)
+    {
+        const std::size_t aligned = mFill / kAlign * kAlign, rest = mFill - aligned;
+        const std::vector<char> tail(mBuffer[mCurrent] + aligned, mBuffer[mCurrent] + mFill);
+        const std::uint64_t tailOffset = mOffset + aligned;
+        if (aligned > 0)
+            if (const int e = submit(aligned)) return e;
+        if (const int e = drain()) return e;
+        return rest > 0 ? pwriteAll(bufferedFd, tail.data(), rest, tailOffset) : 0;
+    }
+
+private:
+    explicit DirectWriter(int fd) : mFd(fd)
+    {
+        for (char*& b : mBuffer)
+            if (::posix_memalign(reinterpret_cast<void**>(&b), kAlign, kBlock) != 0) b = nullptr;
+    }
+
+    /// Waits until no block is in flight; 0 or the first errno of the background writes.
+    int drain()
+    {
+        std::unique_lock<std::mutex> lock(mMutex);
+        mIdle.wait(lock, [&] { return !mPending; });
+        return mError;
+    }
+
+    /// Hands the first @p bytes of the block being filled to the thread; fills the other.
+    int submit(std::size_t bytes)
+    {
+        {
+            std::unique_lock<std::mutex> lock(mMutex);
+            mIdle.wait(lock, [&] { return !mPending; });
+            if (mError) return mError;
+            mPending = true;
+            mPendingData = mBuffer[mCurrent];
+            mPendingBytes = bytes;
+            mPendingOffset = mOffset;
+        }
+        mWake.notify_one();
+        mCurrent ^= 1;
+        mOffset += bytes;
+        mFill = 0;
+        return 0;
+    }
+
+    void run()
+    {
+        std::unique_lock<std::mutex> lock(mMutex);
+        while (true) {
+            mWake.wait(lock, [&] { return mStop || mPending; });
+            if (!mPending) return;  // stopped with nothing in flight
+            const char* data = mPendingData;
+            const std::size_t bytes = mPendingBytes;
+            const std::uint64_t offset = mPendingOffset;
+            lock.unlock();
+            const int e = pwriteAll(mFd, data, bytes, offset);
+            lock.lock();
+            if (e != 0 && mError == 0) mError = e;
+            mPending = false;
+            mIdle.notify_all();
+        }
+    }
+
+    int mFd;
+    char* mBuffer[2] = {nullptr, nullptr};
+    int mCurrent = 0;
+    std::size_t mFill = 0;      // bytes in the block being filled
+    std::uint64_t mOffset = 0;  // its offset in the file
+    std::thread mThread;
+    std::mutex mMutex;
+    std::condition_variable mWake, mIdle;
+    bool mPending = false, mStop = false;
+    const char* mPendingData = nullptr;
+    std::size_t mPendingBytes = 0;
+    std::uint64_t mPendingOffset = 0;
+    int mError = 0;
+};
+
+AtomicFile::AtomicFile(const std::string& target, Mode mode) : mTarget(target)
 {
     checkTarget(target);
 
@@ -144,10 +315,12 @@ AtomicFile::AtomicFile(const std::string& target) : mTarget(target)
         throwWriteError(target, errnoText(code));
     }
     mSlot = registerTemporary(mTemp);
+    if (mode == Mode::Large) mDirect = DirectWriter::open(mTemp);
 }
 
 AtomicFile::~AtomicFile()
 {
+    mDirect.reset();  // waits for a block in flight
     if (mFile) std::fclose(mFile);
     if (!mCommitted && !mTemp.empty()) ::unlink(mTemp.c_str());
     unregisterTemporary(mSlot);
@@ -157,11 +330,17 @@ void AtomicFile::write(const void* data, std::size_t bytes)
 {
     if (!mFile) throwWriteError(mTarget, "the file is already closed");
     if (bytes == 0) return;
+    if (mDirect) {
+        if (const int e = mDirect->append(static_cast<const char*>(data), bytes)) throwWriteError(mTarget, errnoText(e));
+        mPosition += bytes;
+        return;
+    }
     errno = 0;
     if (std::fwrite(data, 1, bytes, mFile) != bytes) {
         const int code = errno != 0 ? errno : EIO;
         throwWriteError(mTarget, errnoText(code));
     }
+    mPosition += bytes;
 }
 
 void AtomicFile::writeAt(std::uint64_t offset, const void* data, std::size_t bytes)
@@ -170,18 +349,19 @@ void AtomicFile::writeAt(std::uint64_t offset, const void* data, std::size_t byt
     if (std::fflush(mFile) != 0) throwWriteError(mTarget, errnoText(errno != 0 ? errno : EIO));
     const int fd = ::fileno(mFile);
     const char* p = static_cast<const char*>(data);
-    while (bytes > 0) {
-        const ssize_t done = ::pwrite(fd, p, bytes, off_t(offset));
-        if (done < 0 && errno == EINTR) continue;
-        if (done <= 0) throwWriteError(mTarget, errnoText(done < 0 ? errno : EIO));
-        p += done, offset += std::uint64_t(done), bytes -= std::size_t(done);
-    }
+    const int e = mDirect ? mDirect->patch(fd, offset, p, bytes) : pwriteAll(fd, p, bytes, offset);
+    if (e != 0) throwWriteError(mTarget, errnoText(e));
 }
 
 void AtomicFile::commit()
 {
     if (mCommitted) return;
     if (!mFile) throwWriteError(mTarget, "the file is already closed");
+    if (mDirect) {
+        const int e = mDirect->finish(::fileno(mFile));
+        mDirect.reset();
+        if (e != 0) throwWriteError(mTarget, errnoText(e));
+    }
     // Durability against power loss (fsync) is not attempted: the goal is that readers and
     // interrupted runs never see a half-written file, which rename() alone guarantees.
     errno = 0;

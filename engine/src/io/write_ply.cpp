@@ -184,7 +184,10 @@ void writePly(const std::string& path, const TriMesh& mesh,
     const bool doublePoints = options.forceDoublePoints || needsDoublePoints(mesh.points);
     const std::string header = plyHeader(mesh.numVertices(), mesh.numTriangles(), names, options, doublePoints);
 
-    AtomicFile file(path);
+    // Outputs of many MB are written past the page cache (AtomicFile::Mode::Large).
+    const std::size_t approximateBytes =
+        numVertices * (3 * sizeof(double) + (properties.size() + listLength) * sizeof(float)) + numFaces * 13;
+    AtomicFile file(path, approximateBytes >= kLargeFileBytes ? AtomicFile::Mode::Large : AtomicFile::Mode::Buffered);
     file.write(header);
 
     const Vec3* points = mesh.points.data();

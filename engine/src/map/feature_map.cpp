@@ -7,6 +7,7 @@
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfIO.h>
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStandardAttributes.h>
@@ -22,6 +23,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <set>
@@ -31,7 +33,36 @@ namespace {
 
 namespace fs = std::filesystem;
 
+/// OpenEXR's output stream on an AtomicFile: written front to back, except the table of
+/// chunk offsets, which OpenEXR fills in at the end (AtomicFile::writeAt).
+class AtomicFileStream : public Imf::OStream {
+public:
+    explicit AtomicFileStream(AtomicFile& file) : Imf::OStream(file.temporaryPath().c_str()), mFile(file) {}
+
+    void write(const char c[], int n) override
+    {
+        try {
+            const std::uint64_t end = mFile.position(), bytes = std::uint64_t(std::max(n, 0));
+            if (mPosition > end) throw Iex::IoExc("cannot seek beyond the end of the data written");
+            const std::uint64_t before = std::min(bytes, end - mPosition);  // overwrites
+            if (before > 0) mFile.writeAt(mPosition, c, std::size_t(before));
+            if (bytes > before) mFile.write(c + before, std::size_t(bytes - before));
+            mPosition += bytes;
+        } catch (const IOError& e) {
+            throw Iex::IoExc(e.what());
+        }
+    }
+    std::uint64_t tellp() override { return mPosition; }
+    void seekp(std::uint64_t pos) override { mPosition = pos; }
+
+private:
+    AtomicFile& mFile;
+    std::uint64_t mPosition = 0;
+};
+
 constexpr int kRowsPerChunk = 64;
+/// Pixels per block of the band fill (writeFeatureMap).
+constexpr int kBlockPixels = 64;
 
 Imf::Compression toImf(ExrCompression c)
 {
@@ -127,42 +158,57 @@ FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, con
     std::vector<std::uint16_t> bandHalf;  // half bits when options.half
     if (options.half) bandHalf.resize(nc * chunkPixels);
 
-    // The temporary file of AtomicFile, written by OpenEXR, renamed on commit.
-    AtomicFile temp(path);
+    // OpenEXR writes through AtomicFile (a temporary file renamed on commit), which writes
+    // past the page cache where it can (AtomicFile::Mode::Large).
+    const std::size_t rawBytes = std::size_t(width) * std::size_t(height) * nc * (options.half ? 2 : 4);
+    AtomicFile temp(path, rawBytes >= kLargeFileBytes ? AtomicFile::Mode::Large : AtomicFile::Mode::Buffered);
+    AtomicFileStream stream(temp);
     try {
         // As many threads as TBB may use here (msii -j limits it).
         Imf::setGlobalThreadCount(int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
-        Imf::OutputFile file(temp.temporaryPath().c_str(), header);
+        Imf::OutputFile file(stream, header);
         const int numChunks = (height + kRowsPerChunk - 1) / kRowsPerChunk;
         if (progress) progress->start("writing the feature map", std::size_t(numChunks));
         const float nan = std::numeric_limits<float>::quiet_NaN();
         for (int y0 = 0; y0 < height; y0 += kRowsPerChunk) {
             const int rows = std::min(kRowsPerChunk, height - y0);
+            // Per row, blocks of kBlockPixels: the values of a block's pixels are interpolated
+            // pixel by pixel from the rows of the vertex table (contiguous), then stored
+            // channel by channel (contiguous): a pixel's 70 values are not scattered over 70
+            // planes one at a time.
             tbb::parallel_for(tbb::blocked_range<int>(0, rows), [&](const auto& r) {
-                std::vector<float> value(numValues);
+                std::vector<float> value(std::size_t(kBlockPixels) * numValues);
+                std::array<bool, kBlockPixels> hit{};
                 for (int y = r.begin(); y < r.end(); ++y)
-                    for (int x = 0; x < width; ++x) {
-                        const std::size_t k = hits.index(x, y0 + y);
-                        const std::size_t at = std::size_t(y) * std::size_t(width) + std::size_t(x);
-                        const std::uint32_t t = hits.triangle[k];
-                        band[at] = hits.depth[k];
-                        band[4 * chunkPixels + at] = t != PixelHits::kNone ? 1.0f : 0.0f;
-                        if (t == PixelHits::kNone) {
-                            for (std::size_t c = 1; c < nc; ++c)
-                                if (c != 4) band[c * chunkPixels + at] = nan;
-                            continue;
+                    for (int x0 = 0; x0 < width; x0 += kBlockPixels) {
+                        const int count = std::min(kBlockPixels, width - x0);
+                        const std::size_t k0 = hits.index(x0, y0 + y);
+                        const std::size_t at = std::size_t(y) * std::size_t(width) + std::size_t(x0);
+                        for (int x = 0; x < count; ++x) {
+                            const std::size_t k = k0 + std::size_t(x);
+                            const std::uint32_t t = hits.triangle[k];
+                            band[at + std::size_t(x)] = hits.depth[k];
+                            band[4 * chunkPixels + at + std::size_t(x)] = t != PixelHits::kNone ? 1.0f : 0.0f;
+                            hit[std::size_t(x)] = t != PixelHits::kNone;
+                            if (t == PixelHits::kNone) continue;
+                            // Linear interpolation over the triangle (barycentric weights).
+                            const Triangle& tri = mesh.triangles[t];
+                            const float w1 = hits.b1[k], w2 = hits.b2[k], w0 = 1.0f - w1 - w2;
+                            const float* r0 = table.data() + std::size_t(tri[0]) * numValues;
+                            const float* r1 = table.data() + std::size_t(tri[1]) * numValues;
+                            const float* r2 = table.data() + std::size_t(tri[2]) * numValues;
+                            float* v = value.data() + std::size_t(x) * numValues;
+                            for (std::size_t q = 0; q < numValues; ++q) v[q] = w0 * r0[q] + w1 * r1[q] + w2 * r2[q];
+                            const float len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+                            for (int c = 0; c < 3; ++c) v[c] = len > 0 ? v[c] / len : nan;
                         }
-                        // Linear interpolation over the triangle (barycentric weights).
-                        const Triangle& tri = mesh.triangles[t];
-                        const float w1 = hits.b1[k], w2 = hits.b2[k], w0 = 1.0f - w1 - w2;
-                        const float* r0 = table.data() + std::size_t(tri[0]) * numValues;
-                        const float* r1 = table.data() + std::size_t(tri[1]) * numValues;
-                        const float* r2 = table.data() + std::size_t(tri[2]) * numValues;
-                        for (std::size_t q = 0; q < numValues; ++q) value[q] = w0 * r0[q] + w1 * r1[q] + w2 * r2[q];
-                        const float len = std::sqrt(value[0] * value[0] + value[1] * value[1] + value[2] * value[2]);
-                        for (int c = 0; c < 3; ++c)
-                            band[std::size_t(1 + c) * chunkPixels + at] = len > 0 ? value[std::size_t(c)] / len : nan;
-                        for (std::size_t q = 3; q < numValues; ++q) band[(2 + q) * chunkPixels + at] = value[q];
+                        // Channel c of the band holds value q = c − 2 (c >= 5) or c − 1 (normals).
+                        for (std::size_t q = 0; q < numValues; ++q) {
+                            float* out = band.data() + (q < 3 ? 1 + q : 2 + q) * chunkPixels + at;
+                            const float* v = value.data() + q;
+                            for (int x = 0; x < count; ++x)
+                                out[x] = hit[std::size_t(x)] ? v[std::size_t(x) * numValues] : nan;
+                        }
                     }
             });
             if (options.half)
