@@ -88,7 +88,7 @@ std::function<int()> addMapCommand(CLI::App& app)
     addViewOptions(cmd, args->view, kDefaultPixels);
     cmd->add_option("--properties", args->properties,
                     "Vertex properties to map, comma-separated (default: all)");
-    cmd->add_option("--compression", args->compression, "piz (default: smallest and fastest on feature data), zip, zips, rle or none; all lossless");
+    cmd->add_option("--compression", args->compression, "piz (default: the smallest files of feature data), zip, zips, rle or none (about 5 times faster than piz, twice the size); all lossless");
     cmd->add_flag("--half", args->half, "16-bit half channels instead of 32-bit float");
     cmd->add_option("--units", args->units, "Units of the mesh, for the header (default mm)");
     cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
