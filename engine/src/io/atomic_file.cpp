@@ -140,18 +140,19 @@ public:
     static constexpr std::size_t kBlock = std::size_t(16) << 20;  // bytes per write
 
     /// A writer on a second descriptor of @p path opened with O_DIRECT; nullptr where the
-    /// file system refuses it.
-    static std::unique_ptr<DirectWriter> open(const std::string& path)
+    /// file system refuses it. Blocks whose direct write is refused all the same (EINVAL:
+    /// alignment or file system) go through @p bufferedFd.
+    static std::unique_ptr<DirectWriter> open(const std::string& path, int bufferedFd)
     {
 #ifdef O_DIRECT
         const int fd = ::open(path.c_str(), O_WRONLY | O_DIRECT | O_CLOEXEC);
         if (fd < 0) return nullptr;
-        std::unique_ptr<DirectWriter> writer(new DirectWriter(fd));
+        std::unique_ptr<DirectWriter> writer(new DirectWriter(fd, bufferedFd));
         if (!writer->mBuffer[0] || !writer->mBuffer[1]) return nullptr;
         writer->mThread = std::thread([w = writer.get()] { w->run(); });
         return writer;
 #else
-        (void)path;
+        (void)path, (void)bufferedFd;
         return nullptr;
 #endif
     }
@@ -218,7 +219,7 @@ public:
     }
 
 private:
-    explicit DirectWriter(int fd) : mFd(fd)
+    DirectWriter(int fd, int bufferedFd) : mFd(fd), mBufferedFd(bufferedFd)
     {
         for (char*& b : mBuffer)
             if (::posix_memalign(reinterpret_cast<void**>(&b), kAlign, kBlock) != 0) b = nullptr;
@@ -261,7 +262,8 @@ private:
             const std::size_t bytes = mPendingBytes;
             const std::uint64_t offset = mPendingOffset;
             lock.unlock();
-            const int e = pwriteAll(mFd, data, bytes, offset);
+            int e = pwriteAll(mFd, data, bytes, offset);
+            if (e == EINVAL) e = pwriteAll(mBufferedFd, data, bytes, offset);
             lock.lock();
             if (e != 0 && mError == 0) mError = e;
             mPending = false;
@@ -269,7 +271,7 @@ private:
         }
     }
 
-    int mFd;
+    int mFd, mBufferedFd;
     char* mBuffer[2] = {nullptr, nullptr};
     int mCurrent = 0;
     std::size_t mFill = 0;      // bytes in the block being filled
@@ -315,7 +317,7 @@ AtomicFile::AtomicFile(const std::string& target, Mode mode) : mTarget(target)
         throwWriteError(target, errnoText(code));
     }
     mSlot = registerTemporary(mTemp);
-    if (mode == Mode::Large) mDirect = DirectWriter::open(mTemp);
+    if (mode == Mode::Large) mDirect = DirectWriter::open(mTemp, ::fileno(mFile));
 }
 
 AtomicFile::~AtomicFile()
