@@ -6,6 +6,7 @@
 /// files left); rejected properties, compressions and files.
 
 #include <msii/map/feature_map.h>
+#include <msii/map/half_floats.h>
 
 #include <msii/core/errors.h>
 #include <msii/map/map_frame.h>
@@ -17,12 +18,14 @@
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfOutputFile.h>
+#include <Imath/half.h>
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -375,6 +378,38 @@ TEST(FeatureMap, HalfChannelsWithinHalfPrecision)
     EXPECT_GT(differ, 0);  // it really is half precision
     EXPECT_LE(worstRelative, 1e-3);
     record("worstRelative", worstRelative);
+}
+
+// The bulk conversion of --half maps (F16C where the processor has it) gives Imath's
+// half(float) bit for bit: every 997th float bit pattern (4.3M of them: normal, denormal,
+// overflowing, infinite, NaN) and the rounding ties around 1.
+TEST(FeatureMap, HalfConversionIsImaths)
+{
+    std::vector<float> in;
+    for (std::uint64_t bits = 0; bits < (std::uint64_t(1) << 32); bits += 997) {
+        const std::uint32_t b = std::uint32_t(bits);
+        float f;
+        std::memcpy(&f, &b, sizeof f);
+        in.push_back(f);
+    }
+    for (int k = 0; k < 64; ++k) in.push_back(1.0f + float(k) * 0x1p-11f + 0x1p-12f);  // ties
+    in.push_back(65519.0f), in.push_back(65520.0f), in.push_back(-0.0f), in.push_back(0x1p-25f);
+    std::vector<std::uint16_t> out(in.size() + 3);  // odd lengths: the tail after 8-wide steps
+    for (const std::size_t n : {in.size(), in.size() - 5}) {
+        std::fill(out.begin(), out.end(), std::uint16_t(0xabcd));
+        floatsToHalf(in.data(), out.data(), n);
+        std::size_t wrong = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const half expected(in[i]);
+            half got;
+            got.setBits(out[i]);
+            const bool same = std::isnan(in[i]) ? got.isNan() : out[i] == expected.bits();
+            if (!same && ++wrong < 5) ADD_FAILURE() << "float " << in[i] << ": " << out[i] << " != " << expected.bits();
+        }
+        EXPECT_EQ(wrong, 0u);
+        EXPECT_EQ(out[n], 0xabcd);  // nothing written beyond n
+    }
+    std::printf("half conversion with F16C: %s\n", halfConversionUsesF16c() ? "yes" : "no");
 }
 
 TEST(FeatureMap, CompressionsAreLossless)

@@ -3,6 +3,7 @@
 #include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
 #include <msii/io/atomic_file.h>
+#include <msii/map/half_floats.h>
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
@@ -210,13 +211,13 @@ FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, con
                                 out[x] = hit[std::size_t(x)] ? v[std::size_t(x) * numValues] : nan;
                         }
                     }
+                // --half: the rows just filled, while they are in the cache.
+                if (options.half)
+                    for (std::size_t c = 0; c < nc; ++c) {
+                        const std::size_t from = c * chunkPixels + std::size_t(r.begin()) * std::size_t(width);
+                        floatsToHalf(band.data() + from, bandHalf.data() + from, std::size_t(r.size()) * std::size_t(width));
+                    }
             });
-            if (options.half)
-                tbb::parallel_for(std::size_t(0), nc, [&](std::size_t c) {
-                    half* h = reinterpret_cast<half*>(bandHalf.data() + c * chunkPixels);
-                    const float* f = band.data() + c * chunkPixels;
-                    for (std::size_t i = 0; i < std::size_t(rows) * std::size_t(width); ++i) h[i] = half(f[i]);
-                });
             Imf::FrameBuffer fb;
             for (std::size_t c = 0; c < nc; ++c) {
                 // Slices address pixel (x, y) as base + x·xStride + y·yStride: shift by y0 rows.
