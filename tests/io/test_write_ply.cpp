@@ -21,6 +21,7 @@
 
 #include <csignal>
 
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -418,6 +419,51 @@ TEST(AtomicFile, ClearErrors)
 
 // An interrupted process (Ctrl-C, kill, a closed terminal) leaves neither the target nor its
 // temporary file: a child opens two AtomicFiles, writes, and is killed by each signal.
+// A write error in Mode::Large's background thread (here: the file size limit at 20 MB, in
+// a child process) fails the next writes and commit(), a second commit() too, and leaves
+// neither the target nor a temporary file.
+TEST(AtomicFile, LargeModeWriteErrorFailsEveryCommit)
+{
+    for (const auto mode : {AtomicFile::Mode::Large, AtomicFile::Mode::Buffered}) {
+        TempDir dir;
+        const pid_t child = ::fork();
+        ASSERT_GE(child, 0);
+        if (child == 0) {
+            std::signal(SIGXFSZ, SIG_IGN);
+            const rlimit limit{20u << 20, 20u << 20};
+            if (::setrlimit(RLIMIT_FSIZE, &limit) != 0) ::_exit(10);
+            const std::vector<char> chunk(std::size_t(1) << 20, 'x');
+            int code = 0;
+            {
+                AtomicFile file(dir.file("out.bin"), mode);
+                int failed = -1;
+                for (int i = 0; i < 40 && failed < 0; ++i) {
+                    try {
+                        file.write(chunk.data(), chunk.size());
+                    } catch (const IOError&) {
+                        failed = i;
+                    }
+                }
+                // Buffered: fails at 20 MB or at commit; Large: by the block after 32 MB.
+                if (failed >= 0 && failed < 19) code = 11;
+                for (int attempt = 0; attempt < 2; ++attempt) {
+                    try {
+                        file.commit();
+                        code = 12 + attempt;  // must not succeed
+                    } catch (const IOError&) {
+                    }
+                }
+            }
+            ::_exit(code);
+        }
+        int status = 0;
+        ASSERT_EQ(::waitpid(child, &status, 0), child);
+        ASSERT_TRUE(WIFEXITED(status));
+        EXPECT_EQ(WEXITSTATUS(status), 0) << (mode == AtomicFile::Mode::Large ? "large" : "buffered");
+        EXPECT_TRUE(dir.entries().empty());
+    }
+}
+
 TEST(AtomicFile, InterruptionRemovesTheTemporaryFiles)
 {
     for (int sig : {SIGINT, SIGTERM, SIGHUP}) {

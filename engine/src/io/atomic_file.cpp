@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <mutex>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -148,8 +149,16 @@ public:
         const int fd = ::open(path.c_str(), O_WRONLY | O_DIRECT | O_CLOEXEC);
         if (fd < 0) return nullptr;
         std::unique_ptr<DirectWriter> writer(new DirectWriter(fd, bufferedFd));
+        // The same file as the ordinary descriptor (not one put there since), and memory.
+        struct stat a {}, b {};
+        if (::fstat(fd, &a) != 0 || ::fstat(bufferedFd, &b) != 0 || a.st_dev != b.st_dev || a.st_ino != b.st_ino)
+            return nullptr;
         if (!writer->mBuffer[0] || !writer->mBuffer[1]) return nullptr;
-        writer->mThread = std::thread([w = writer.get()] { w->run(); });
+        try {
+            writer->mThread = std::thread([w = writer.get()] { w->run(); });
+        } catch (const std::system_error&) {
+            return nullptr;  // no thread: buffered writes
+        }
         return writer;
 #else
         (void)path, (void)bufferedFd;
@@ -174,6 +183,7 @@ public:
     /// Appends @p bytes; 0 or the errno of a failed write (this one's or an earlier block's).
     int append(const char* data, std::size_t bytes)
     {
+        if (const int e = mError.load(std::memory_order_relaxed)) return e;
         while (bytes > 0) {
             const std::size_t n = std::min(bytes, kBlock - mFill);
             std::memcpy(mBuffer[mCurrent] + mFill, data, n);
@@ -230,7 +240,7 @@ private:
     {
         std::unique_lock<std::mutex> lock(mMutex);
         mIdle.wait(lock, [&] { return !mPending; });
-        return mError;
+        return mError.load();
     }
 
     /// Hands the first @p bytes of the block being filled to the thread; fills the other.
@@ -239,7 +249,7 @@ private:
         {
             std::unique_lock<std::mutex> lock(mMutex);
             mIdle.wait(lock, [&] { return !mPending; });
-            if (mError) return mError;
+            if (const int e = mError.load()) return e;
             mPending = true;
             mPendingData = mBuffer[mCurrent];
             mPendingBytes = bytes;
@@ -265,7 +275,7 @@ private:
             int e = pwriteAll(mFd, data, bytes, offset);
             if (e == EINVAL) e = pwriteAll(mBufferedFd, data, bytes, offset);
             lock.lock();
-            if (e != 0 && mError == 0) mError = e;
+            if (e != 0 && mError.load() == 0) mError.store(e);
             mPending = false;
             mIdle.notify_all();
         }
@@ -283,7 +293,7 @@ private:
     const char* mPendingData = nullptr;
     std::size_t mPendingBytes = 0;
     std::uint64_t mPendingOffset = 0;
-    int mError = 0;
+    std::atomic<int> mError{0};  // the first errno of the background writes
 };
 
 AtomicFile::AtomicFile(const std::string& target, Mode mode) : mTarget(target)
@@ -362,7 +372,12 @@ void AtomicFile::commit()
     if (mDirect) {
         const int e = mDirect->finish(::fileno(mFile));
         mDirect.reset();
-        if (e != 0) throwWriteError(mTarget, errnoText(e));
+        if (e != 0) {
+            // Closed, so that neither a retry nor more writes can commit what is there.
+            std::fclose(mFile);
+            mFile = nullptr;
+            throwWriteError(mTarget, errnoText(e));
+        }
     }
     // Durability against power loss (fsync) is not attempted: the goal is that readers and
     // interrupted runs never see a half-written file, which rename() alone guarantees.

@@ -50,15 +50,20 @@ public:
             if (bytes > before) mFile.write(c + before, std::size_t(bytes - before));
             mPosition += bytes;
         } catch (const IOError& e) {
+            if (mError.empty()) mError = e.what();
             throw Iex::IoExc(e.what());
         }
     }
+    /// The first write error, also one OpenEXR swallowed (its destructor writes the table of
+    /// chunk offsets and ignores failures); empty if none.
+    const std::string& error() const { return mError; }
     std::uint64_t tellp() override { return mPosition; }
     void seekp(std::uint64_t pos) override { mPosition = pos; }
 
 private:
     AtomicFile& mFile;
     std::uint64_t mPosition = 0;
+    std::string mError;
 };
 
 constexpr int kRowsPerChunk = 64;
@@ -239,6 +244,7 @@ FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, con
     } catch (const Iex::BaseExc& e) {
         throw IOError("cannot write " + path + ": " + e.what());
     }
+    if (!stream.error().empty()) throw IOError(stream.error());
     temp.commit();
     info.writeSeconds = stage.seconds();
     for (auto it = header.channels().begin(); it != header.channels().end(); ++it) info.channels.push_back(it.name());

@@ -2,6 +2,7 @@
 
 #include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
+#include <msii/invariants/patch_line.h>
 #include <msii/invariants/scales.h>
 #include <msii/mesh/mesh_stats.h>
 
@@ -217,7 +218,7 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
     ComputeResult result = plan;
     result.invariants.radii = result.patchLine.radii = radii;
     result.invariants.levelOfRadius = levels;
-    result.patchLine.levelOfRadius = gridLevelOfRadius(radii, plan.voxelSize, patchLinePrecision(options));
+    result.patchLine.levelOfRadius = patchLineLevelOfRadius(radii, plan.voxelSize, patchLinePrecision(options));
     result.invariants.numLevels = *std::max_element(levels.begin(), levels.end()) + 1;
 
     // Each tile's own vertices and the triangles of its grown box, sorted out in one pass each.
