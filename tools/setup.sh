@@ -9,7 +9,11 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build_dir="${MSII_BUILD_DIR:-$here/build}"
 jobs="${MSII_JOBS:-2}"
 with_tests=ON
-[ "${1:-}" = "--no-tests" ] && with_tests=OFF
+if [ "${1:-}" = "--no-tests" ]; then
+  with_tests=OFF
+  # A build folder that already builds the tests (a developer's) keeps building them.
+  if grep -qs '^MSII_BUILD_TESTS:BOOL=ON$' "$build_dir/CMakeCache.txt"; then with_tests=ON; fi
+fi
 
 packages=(
   build-essential cmake pkg-config
