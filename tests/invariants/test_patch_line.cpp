@@ -144,6 +144,22 @@ AgainstExact compareWithExact(const std::vector<const std::vector<std::vector<fl
     return a;
 }
 
+/// P and L alone on the tablet at `--pl-precision` @p precision against the exact mode at
+/// its central vertices (worst over radii >= 3 median edges); @p fast receives the run.
+AgainstExact patchLineAgainstExact(TriMesh& mesh, double precision, ComputeResult& fast)
+{
+    ComputeOptions co = patchLineOnly(2.4);
+    co.patchLinePrecision = precision;
+    fast = computeInvariants(mesh, co);
+    ExactOptions eo;
+    eo.radii = fast.patchLine.radii;
+    eo.computeVolumeSphere = false;
+    eo.vertices = centralVertices(mesh, fast, co);
+    const ExactResult exact = computeExact(mesh, eo);
+    return compareWithExact({&fast.patchLine.patch, &fast.patchLine.line}, {&exact.patch, &exact.line}, exact,
+                            3 * fast.stats.medianEdge, false);
+}
+
 } // namespace
 
 TEST(PatchLine, FlatPlaneIsOne)
@@ -274,19 +290,11 @@ TEST(PatchLine, TabletAgainstExactMode)
 TEST(PatchLine, TabletPatchAtTwelveCellsPerRadius)
 {
     TriMesh mesh = exactTestTablet();
-    ComputeOptions co = patchLineOnly(2.4);
-    co.patchLinePrecision = 12;
-    const ComputeResult fast = computeInvariants(mesh, co);
+    ComputeResult fast;
+    const AgainstExact e = patchLineAgainstExact(mesh, 12, fast);
     for (std::size_t j = 0; j < fast.patchLine.radii.size(); ++j)
         EXPECT_EQ(fast.patchLine.levelOfRadius[j], gridLevelOfRadius({fast.patchLine.radii[j]}, fast.voxelSize, 12).front())
             << "r = " << fast.patchLine.radii[j];  // (R is on level 2 with r/h = 12: not merged)
-    ExactOptions eo;
-    eo.radii = fast.patchLine.radii;
-    eo.computeVolumeSphere = false;
-    eo.vertices = centralVertices(mesh, fast, co);
-    const ExactResult exact = computeExact(mesh, eo);
-    const AgainstExact e = compareWithExact({&fast.patchLine.patch, &fast.patchLine.line},
-                                            {&exact.patch, &exact.line}, exact, 3 * fast.stats.medianEdge, false);
     ASSERT_EQ(e.nans, 0u);
     const auto& worstMean = e.worstMean;
     const auto& worstMax = e.worstMax;
@@ -308,16 +316,8 @@ TEST(PatchLine, TabletDifferencesFallWithPrecision)
     TriMesh mesh = exactTestTablet();
     std::vector<AgainstExact> sweep;
     for (double precision : {6.0, 7.0, 8.0, 10.0}) {
-        ComputeOptions co = patchLineOnly(2.4);
-        co.patchLinePrecision = precision;
-        const ComputeResult fast = computeInvariants(mesh, co);
-        ExactOptions eo;
-        eo.radii = fast.patchLine.radii;
-        eo.computeVolumeSphere = false;
-        eo.vertices = centralVertices(mesh, fast, co);
-        const ExactResult exact = computeExact(mesh, eo);
-        sweep.push_back(compareWithExact({&fast.patchLine.patch, &fast.patchLine.line}, {&exact.patch, &exact.line},
-                                         exact, 3 * fast.stats.medianEdge, false));
+        ComputeResult fast;
+        sweep.push_back(patchLineAgainstExact(mesh, precision, fast));
         ASSERT_EQ(sweep.back().nans, 0u);
         std::printf("precision %4.1f for P and L: worst mean |dP| %.2e, max %.1e; |dL| %.2e, max %.1e\n", precision,
                     sweep.back().worstMean[0], sweep.back().worstMax[0], sweep.back().worstMean[1],

@@ -855,11 +855,13 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         // A value is masked when the kernel's reach, plus the spread of a sample, gets to a
         // border: r + max(3w, 4h) + 2 h0, with h the cell of the radius's level in the V/S
         // plan, so at least where V and S are (r + 4h + 2 h0), also for a merged level.
-        const auto masked = [&](std::size_t i, std::size_t k) {
+        std::vector<double> maskReach(kw.size());  // per radius of the level
+        for (std::size_t k = 0; k < kw.size(); ++k) {
             const std::size_t j = std::size_t(levelRadii[k]);
-            return !options.borderDistance.empty() &&
-                   radii[j] + std::max(kKernelHalfSupport * kw[k], 4.0 * h0 * std::ldexp(1.0, planLevel[j])) + 2.0 * h0 >
-                       options.borderDistance[i];
+            maskReach[k] = radii[j] + std::max(kKernelHalfSupport * kw[k], 4.0 * h0 * std::ldexp(1.0, planLevel[j])) + 2.0 * h0;
+        }
+        const auto masked = [&](std::size_t i, std::size_t k) {
+            return !options.borderDistance.empty() && maskReach[k] > options.borderDistance[i];
         };
         const auto store = [&](std::size_t i, std::size_t k, double sumP, double sumL) {
             const std::size_t j = std::size_t(levelRadii[k]);
