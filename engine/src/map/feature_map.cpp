@@ -242,6 +242,8 @@ FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, con
         }
         if (progress) progress->end();
     } catch (const Iex::BaseExc& e) {
+        // A failed write of the file says why itself (e.g. "No space left on device").
+        if (!stream.error().empty()) throw IOError(stream.error());
         throw IOError("cannot write " + path + ": " + e.what());
     }
     if (!stream.error().empty()) throw IOError(stream.error());
