@@ -172,11 +172,11 @@ TEST(PatchLine, FlatPlaneIsOne)
     const ComputeResult res = computeInvariants(mesh, patchLineOnly(2.0));
     const Errors e = compare(res, [](double) { return 1.0; }, [](double) { return 1.0; }, "plane");
     ASSERT_GE(e.checked, 10u);
-    // Measured: max 1.4e-4 (P), 5.6e-4 (L); means 6.7e-5 (P), 2.1e-4 (L, the first radius
-    // of a level).
-    EXPECT_LE(e.maxP, 5e-4);
+    // Measured: max 9.2e-4 (P, at r/h = 6 with P's kernel of one cell), 5.6e-4 (L); means
+    // 2.1e-4 (P, the first radius of level 2) and 2.1e-4 (L).
+    EXPECT_LE(e.maxP, 1e-3);
     EXPECT_LE(e.maxL, 1e-3);
-    EXPECT_LE(e.meanP, 1e-4);
+    EXPECT_LE(e.meanP, 3e-4);
     EXPECT_LE(e.meanL, 3e-4);
 }
 
@@ -195,8 +195,8 @@ TEST(PatchLine, SphereAndCavityMatchClosedForms)
             res, [](double) { return 1.0; },
             [](double r) { return std::sqrt(1.0 - r * r / 400.0); }, cavity ? "cavity" : "sphere");
         ASSERT_GE(e.checked, 14u);
-        // The bounds, 2e-3 for both; measured max 4.0e-4 (P) and 1.05e-3 (L), means
-        // 3.0e-4 and 6.0e-5.
+        // The bounds, 2e-3 for both; measured max 8.6e-4 (P) and 1.05e-3 (L), means
+        // 9.9e-5 and 4.9e-5.
         EXPECT_LE(e.maxP, 2e-3);
         EXPECT_LE(e.maxL, 2e-3);
         EXPECT_LE(e.meanP, 5e-4);
@@ -271,22 +271,24 @@ TEST(PatchLine, TabletAgainstExactMode)
     EXPECT_LE(worstMax[0], 1e-2);
     EXPECT_LE(worstMean[1], 1e-3);
     EXPECT_LE(worstMax[1], 1e-2);
-    // P and L do not yet (README, limits): measured worst means 1.9e-3 (P) and 4.0e-3 (L),
-    // maxima 2.2e-2 and 3.2e-2. What remains is the blur of the kernel across r where P(r)
-    // and L(r) kink (a sphere meeting a crease), largest at the first radius of a level.
-    // R = 2.4 alone would start level 3 (kernel knots R/3); on level 2 (patchLineLevelOfRadius)
-    // its mean differences are 8.1e-4 and 3.0e-3 (2.1e-3 and 5.4e-3 on level 3).
+    // P meets them too: measured worst mean 7.7e-4, max 9.1e-3 (with P's kernel of two
+    // cells, as L's, 1.9e-3 and 2.2e-2). L does not yet (README, limits): worst mean 3.6e-3,
+    // max 3.2e-2. What remains is the blur of L's kernel (two cells) across r where L(r)
+    // has a square-root onset (a sphere becoming tangent to a facet): narrower kernels let
+    // the samples' shapes through (one cell: the plane's mean L̂ error 2.8e-3). R = 2.4
+    // alone would start level 3; on level 2 (patchLineLevelOfRadius) its L̂ mean difference
+    // is 2.7e-3 (5.4e-3 on level 3).
     EXPECT_EQ(fast.patchLine.levelOfRadius.back(), 2);
-    EXPECT_LE(worstMean[2], 2.5e-3);
-    EXPECT_LE(worstMax[2], 3e-2);
+    EXPECT_LE(worstMean[2], 1e-3);
+    EXPECT_LE(worstMax[2], 1e-2);
     EXPECT_LE(worstMean[3], 5e-3);
     EXPECT_LE(worstMax[3], 4e-2);
 }
 
 // With twice the cells per radius for P and L alone (ComputeOptions::patchLinePrecision,
-// `--pl-precision 12`), P meets the mean bound on the tablet against the exact mode
-// (measured 8.3e-4); its max (2.2e-2) and L (3.0e-3, max 3.2e-2) do not yet: the worst
-// values are at the first radii, on the finest level, which this does not refine.
+// `--pl-precision 12`), P's differences from the exact mode on the tablet halve (measured
+// worst mean 3.5e-4, max 5.3e-3); L's hardly move (2.7e-3, max 3.2e-2): its worst values
+// are at the first radii, on the finest level, which this does not refine.
 TEST(PatchLine, TabletPatchAtTwelveCellsPerRadius)
 {
     TriMesh mesh = exactTestTablet();
@@ -302,15 +304,15 @@ TEST(PatchLine, TabletPatchAtTwelveCellsPerRadius)
     std::printf("precision 12 for P and L: worst mean |dP| %.1e, max %.1e; |dL| %.1e, max %.1e\n",
                 worstMean[0], worstMax[0], worstMean[1], worstMax[1]);
     ASSERT_GE(checked, 14u);
-    EXPECT_LE(worstMean[0], 1e-3);  // the bound
-    EXPECT_LE(worstMax[0], 3e-2);
+    EXPECT_LE(worstMean[0], 5e-4);
+    EXPECT_LE(worstMax[0], 1e-2);
     EXPECT_LE(worstMean[1], 4e-3);
     EXPECT_LE(worstMax[1], 4e-2);
 }
 
 // The README's `--pl-precision` table: the tablet's worst mean differences from the exact
 // mode at precisions 6, 7, 8 and 10, printed; a finer precision must lower both (measured
-// P 1.9e-3, 1.45e-3, 1.25e-3, 9.6e-4; L 4.0e-3, 3.5e-3, 3.5e-3, 3.2e-3).
+// P 7.7e-4, 5.3e-4, 4.6e-4, 3.6e-4; L 3.6e-3, 3.15e-3, 3.15e-3, 2.9e-3).
 TEST(PatchLine, TabletDifferencesFallWithPrecision)
 {
     TriMesh mesh = exactTestTablet();

@@ -346,15 +346,17 @@ inline double fourthOrder(Spline spline, double t)
 }
 
 constexpr double kKernelHalfSupport = 3.0;  // K vanishes beyond ±3 knots
-/// Knot spacing of the kernel in cells of the level: wide enough that the samples'
+/// Knot spacing of L's kernel in cells of the level: wide enough that the samples'
 /// irregular shapes average out (with 1.75 the plane's mean L̂ error is 7.8e-4, not 2.3e-4,
-/// and the sphere's max 1.7e-3, not 1.4e-3), and narrow against the kinks of P(r), L(r).
-/// The same on the finest level, whose samples hold only a few triangle pieces each: 2.5
-/// cells there lowered the plane's max L̂ error at its largest finest-level radius from
-/// 7.6e-4 to 4.2e-4 (sphere 1.2e-3 to 4.7e-4), but blurred the tablet's kinks more (P̂'s
-/// mean difference from the exact mode 7.0e-4 instead of 4.2e-4, max 1.5e-2 instead of
-/// 1.0e-2) and took about 0.6 s more on the 1.1M-vertex benchmark.
-constexpr double kKernelCells = 2.0;
+/// and the sphere's max 1.7e-3, not 1.4e-3), and narrow against the kinks of L(r). The same
+/// on the finest level, whose samples hold only a few triangle pieces each.
+constexpr double kLineKernelCells = 2.0;
+/// Knot spacing of P's kernel: one cell. P sums areas, so a sample's shape matters far less
+/// than for L (the plane's max P̂ error 9e-4), and the blur of P(r)'s kinks, where a sphere
+/// meets a crease, is what remains against the exact mode: on the tablet test P̂'s worst
+/// mean difference fell from 1.9e-3 (2 cells, as L) to 7.7e-4 and its max from 2.2e-2 to
+/// 9.1e-3 (with the fit of interpolateFromSamples).
+constexpr double kPatchKernelCells = 1.0;
 /// Histogram bins per cell. Linear sharing between bin centres blurs d by a tent of
 /// variance bin²/6; few bins keep the weighted sums per radius cheap.
 constexpr int kBinsPerCell = 8;
@@ -363,14 +365,14 @@ constexpr int kBinsPerCell = 8;
 constexpr std::size_t kChannels = 4;
 typedef float Channels __attribute__((vector_size(16)));
 
-/// The kernel's knot spacing at radius r on a level of cell h: kKernelCells cells, but at
-/// most r/3, so that the kernel stays within d >= 0 (small radii on the finest level).
-inline double kernelKnotSpacing(double r, double h)
+/// The kernel's knot spacing at radius r on a level of cell h: @p cells cells, but at most
+/// r/3, so that the kernel stays within d >= 0 (small radii on the finest level).
+inline double kernelKnotSpacing(double r, double h, double cells = kLineKernelCells)
 {
-    return std::min(kKernelCells * h, r / kKernelHalfSupport);
+    return std::min(cells * h, r / kKernelHalfSupport);
 }
 
-/// How far from a point a radius's kernel reaches: r + 3w.
+/// How far from a point a radius's kernels reach: r + 3w, w that of L (the wider).
 inline double kernelReach(double r, double h)
 {
     return r + kKernelHalfSupport * kernelKnotSpacing(r, h);
@@ -714,7 +716,12 @@ void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec
                     const double agree = nrm.x * nrm.x * t[0][k] + nrm.y * nrm.y * t[1][k] + nrm.z * nrm.z * t[2][k] +
                                          2.0 * (nrm.x * nrm.y * t[3][k] + nrm.x * nrm.z * t[4][k] + nrm.y * nrm.z * t[5][k]);
                     if (agree < kSameSide) continue;
-                    const double wt = (1.0 - q2) * (1.0 - q2);
+                    // (1 − q²)⁸ ≈ exp(−2 |d|²/h²): the fit leans on the samples within about
+                    // h/2, as P̂ and L̂ bend on a scale of h near creases; (1 − q²)² gave P̂'s
+                    // tablet max 1.4e-2 instead of 9.1e-3 (more vertices are evaluated where
+                    // they are: 9.0k instead of 4.9k of 124k there).
+                    const double s2 = (1.0 - q2) * (1.0 - q2), s4 = s2 * s2;
+                    const double wt = s4 * s4;
                     const std::array<double, 3> phi{1.0, dot(d, u) / h, dot(d, v) / h};
                     for (int a = 0; a < 3; ++a)
                         for (int b = 0; b < 3; ++b) m[a][b] += wt * phi[a] * phi[b];
@@ -829,21 +836,32 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         kernel.weights.assign(kw.size() * kChannels * std::size_t(kernel.numBins), 0.0f);
         const double binVariance = kernel.bin * kernel.bin / 6.0;
         for (std::size_t k = 0; k < kw.size(); ++k) {
+            // w for L, wp for P (narrower, kPatchKernelCells): P's weight is 1 below its
+            // support and 0 beyond, L's 0 outside its own.
             const double r = radii[std::size_t(levelRadii[k])], w = kw[k];
+            const double wp = kernelKnotSpacing(r, level.h, kPatchKernelCells);
             int whole = 0, inside = 0;  // whole areas on bins [0, whole), nothing from inside on
             for (int b = 0; b < kernel.numBins; ++b) {
-                const double d = (b + 0.5) * kernel.bin, tp = (r - d) / w, tl = (d - r) / w;
-                if (tp >= kKernelHalfSupport) {
-                    if (whole == b) whole = b + 1;
+                const double d = (b + 0.5) * kernel.bin, tp = (r - d) / wp, tl = (d - r) / w;
+                const bool patchWhole = tp >= kKernelHalfSupport, patchNone = tp <= -kKernelHalfSupport;
+                const bool lineNone = std::abs(tl) >= kKernelHalfSupport;
+                if (patchWhole && lineNone && whole == b) {
+                    whole = b + 1;
                     continue;
                 }
-                if (tp <= -kKernelHalfSupport) continue;
+                if (patchNone && lineNone) continue;
                 inside = b + 1;
                 float* at = kernel.weights.data() + (k * kernel.numBins + std::size_t(b)) * kChannels;
-                at[0] = float(fourthOrder(bsplineIntegral, tp));                           // P: f
-                at[1] = float(fourthOrder(bspline, tl) / w);                               // L: f
-                at[2] = float(0.5 * fourthOrder(bsplineDerivative, tp) / (w * w));         // P: f″/2
-                at[3] = float(0.5 * fourthOrder(bsplineSecondDerivative, tl) / (w * w * w));  // L: f″/2
+                if (patchWhole) {
+                    at[0] = 1.0f;
+                } else if (!patchNone) {
+                    at[0] = float(fourthOrder(bsplineIntegral, tp));                       // P: f
+                    at[2] = float(0.5 * fourthOrder(bsplineDerivative, tp) / (wp * wp));   // P: f″/2
+                }
+                if (!lineNone) {
+                    at[1] = float(fourthOrder(bspline, tl) / w);                               // L: f
+                    at[3] = float(0.5 * fourthOrder(bsplineSecondDerivative, tl) / (w * w * w));  // L: f″/2
+                }
             }
             // An even number of bins: one more with weights 0 if needed (d < reach, so
             // inside <= numBins − 2).

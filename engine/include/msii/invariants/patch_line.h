@@ -13,16 +13,18 @@
 ///    the distance d = |x − p| of area, and of area·g with g = |∇_M d| = sqrt(1 − (û·n)²)
 ///    (û = (x − p)/d). Then P(r) = Σ a·F((r − d)/w) and, by the coarea formula
 ///    L = ∫_M δ(|x − p| − r)·|∇_M |x − p|| dA, L(r) = Σ a·g·K((d − r)/w)/w (paper Eq. 2),
-///    with K a kernel of knot spacing w (2 cells, at most r/3) and F its
-///    integral, and all radii of a level share the pass.
+///    with K a kernel of knot spacing w and F its integral, and all radii of a level share
+///    the pass. L's w is 2 cells (at most r/3), P's 1 cell: P sums areas and tolerates a
+///    sharper kernel, which blurs the kinks of P(r) (a sphere meeting a crease) less.
 /// 4. K = 4/3 B(t) − 1/6 (B(t + 1) + B(t − 1)), B the cubic B-spline: ∫K = 1, zero second
 ///    moment, C², support ±3w. So the blur across r leaves any locally quadratic P(r) and
 ///    L(r) unchanged (planes, spheres, cones of edges and corners) without a correction.
 /// 5. Each sample stands for its area spread with its covariance: a second-order quadrature
 ///    (the mean distance d + (tr C − ûᵀCû)/(2d), and f″/2·ûᵀCû in channels of their own).
 /// 6. Coarse levels with fewer samples than vertices evaluate at the samples and fit a plane
-///    to the vertices from the samples on the vertex's side of the surface; vertices on
-///    creases and corners, where that fails, are evaluated where they are.
+///    to the vertices from the samples on the vertex's side of the surface, weighted
+///    towards those within about h/2; vertices on creases and corners, where that fails,
+///    are evaluated where they are.
 
 #include <msii/core/progress.h>
 #include <msii/mesh/trimesh.h>
@@ -41,7 +43,7 @@ struct PatchLineOptions {
     bool computeLine = true;         ///< L
     /// Per-vertex distance to the nearest border (mesh/border_distance.h); empty = closed.
     /// Radius r_j of vertex i is masked (NaN) when r_j + max(3 w_j, 4 h_level) + 2 h_0 >
-    /// borderDistance[i] (w_j the kernel's knot spacing, at most r_j/3): the reach of the
+    /// borderDistance[i] (w_j L's kernel's knot spacing, at most r_j/3): the reach of the
     /// kernel, at least V and S's margin (so P and L are masked wherever V and S are).
     std::vector<double> borderDistance;
 };
