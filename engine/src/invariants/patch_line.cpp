@@ -367,7 +367,7 @@ typedef float Channels __attribute__((vector_size(16)));
 
 /// The kernel's knot spacing at radius r on a level of cell h: @p cells cells, but at most
 /// r/3, so that the kernel stays within d >= 0 (small radii on the finest level).
-inline double kernelKnotSpacing(double r, double h, double cells = kLineKernelCells)
+inline double kernelKnotSpacing(double r, double h, double cells)
 {
     return std::min(cells * h, r / kKernelHalfSupport);
 }
@@ -375,7 +375,7 @@ inline double kernelKnotSpacing(double r, double h, double cells = kLineKernelCe
 /// How far from a point a radius's kernels reach: r + 3w, w that of L (the wider).
 inline double kernelReach(double r, double h)
 {
-    return r + kKernelHalfSupport * kernelKnotSpacing(r, h);
+    return r + kKernelHalfSupport * kernelKnotSpacing(r, h, kLineKernelCells);
 }
 
 /// The 4 floats at @p from as one vector (an unaligned load, without aliasing floats).
@@ -825,8 +825,9 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         LevelKernel kernel;
         kernel.bin = level.h / kBinsPerCell;
         kernel.numRadii = int(levelRadii.size());
-        std::vector<double> kw(levelRadii.size());  // knot spacing per radius
-        for (std::size_t k = 0; k < kw.size(); ++k) kw[k] = kernelKnotSpacing(radii[std::size_t(levelRadii[k])], level.h);
+        std::vector<double> kw(levelRadii.size());  // L's knot spacing per radius
+        for (std::size_t k = 0; k < kw.size(); ++k)
+            kw[k] = kernelKnotSpacing(radii[std::size_t(levelRadii[k])], level.h, kLineKernelCells);
         kernel.reach = kernelReach(radii[std::size_t(levelRadii.back())], level.h);
         kernel.reachCells = int(std::ceil(kernel.reach / level.h)) + 1;
         kernel.numBins = int(std::ceil(kernel.reach / kernel.bin)) + 2;  // bins beyond reach: 0
@@ -836,8 +837,7 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         kernel.weights.assign(kw.size() * kChannels * std::size_t(kernel.numBins), 0.0f);
         const double binVariance = kernel.bin * kernel.bin / 6.0;
         for (std::size_t k = 0; k < kw.size(); ++k) {
-            // w for L, wp for P (narrower, kPatchKernelCells): P's weight is 1 below its
-            // support and 0 beyond, L's 0 outside its own.
+            // w for L, wp for P (narrower): the bins [whole, inside) cover both supports.
             const double r = radii[std::size_t(levelRadii[k])], w = kw[k];
             const double wp = kernelKnotSpacing(r, level.h, kPatchKernelCells);
             int whole = 0, inside = 0;  // whole areas on bins [0, whole), nothing from inside on
@@ -852,16 +852,11 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
                 if (patchNone && lineNone) continue;
                 inside = b + 1;
                 float* at = kernel.weights.data() + (k * kernel.numBins + std::size_t(b)) * kChannels;
-                if (patchWhole) {
-                    at[0] = 1.0f;
-                } else if (!patchNone) {
-                    at[0] = float(fourthOrder(bsplineIntegral, tp));                       // P: f
-                    at[2] = float(0.5 * fourthOrder(bsplineDerivative, tp) / (wp * wp));   // P: f″/2
-                }
-                if (!lineNone) {
-                    at[1] = float(fourthOrder(bspline, tl) / w);                               // L: f
-                    at[3] = float(0.5 * fourthOrder(bsplineSecondDerivative, tl) / (w * w * w));  // L: f″/2
-                }
+                // (Outside a kernel's support these give exactly 1 or 0.)
+                at[0] = float(fourthOrder(bsplineIntegral, tp));                              // P: f
+                at[1] = float(fourthOrder(bspline, tl) / w);                                  // L: f
+                at[2] = float(0.5 * fourthOrder(bsplineDerivative, tp) / (wp * wp));          // P: f″/2
+                at[3] = float(0.5 * fourthOrder(bsplineSecondDerivative, tl) / (w * w * w));  // L: f″/2
             }
             // An even number of bins: one more with weights 0 if needed (d < reach, so
             // inside <= numBins − 2).
