@@ -159,6 +159,7 @@ TEST(MsiiCli, BadInputFailsCleanly)
     expectCleanFailure(patch + " -r 1e9", "radius");
     expectCleanFailure(patch + " -r 1 --invariants V,Q", "unknown invariant 'Q'");
     expectCleanFailure(patch + " -r 1 --pl-precision 0.5", "P and L precision");
+    expectCleanFailure(patch + " -r 1 --pl-precision 0", "P and L precision");
     expectCleanFailure(patch + " -r 1 --pl-precision 100", "P and L precision");
     expectCleanFailure(patch + " -r 1 --invariants ,", "selects nothing");
     expectCleanFailure(patch + " -r 1 --exact --vertices 0,99999999", "vertex 99999999 does not exist");

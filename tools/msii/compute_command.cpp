@@ -23,6 +23,7 @@
 #include <ctime>
 #include <iomanip>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -600,7 +601,14 @@ std::function<int()> addComputeCommand(CLI::App& app)
                     "higher = more exact and slower)");
     cmd->add_option("--pl-precision", args->plPrecision,
                     "The same for P and L alone (default: as --precision; 12 halves their kernel blur "
-                    "at about twice their time)");
+                    "at about twice their time)")
+        // Given, it must be a precision: 0 (the engine's "as V and S") is not one.
+        ->check([](const std::string& text) -> std::string {
+            char* end = nullptr;
+            const double v = std::strtod(text.c_str(), &end);
+            if (end == text.c_str()) return {};  // not a number: CLI11 says so
+            return v >= 1 && v <= 64 ? std::string() : "the P and L precision must be between 1 and 64 cells per radius";
+        });
     cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
     cmd->add_flag("-q,--quiet", args->quiet, "No progress, no summary; errors only");
     cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs");
