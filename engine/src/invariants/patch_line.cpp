@@ -299,64 +299,122 @@ Level makeLevel(const SampleParts& parts, double h0, int index)
 }
 
 // ---------------------------------------------------------------------------------------
-// The kernel. K is built from the cubic B-spline B (knots at the integers, support [-2, 2],
-// ∫B = 1, variance 1/3) as K(t) = 4/3 B(t) − 1/6 (B(t + 1) + B(t − 1)): ∫K = 1 and its
-// second moment is 0, so blurring across r with K leaves any P(r) and L(r) that is locally
-// quadratic unchanged (P ∗ K = P + O(w⁴ P⁗)). K is as smooth as B (C²), with support
-// [-3, 3]. F is its integral; K′ and K″ serve the second-order terms of the quadrature.
+// The kernels. Each is built from a B-spline B of odd degree (knots at the integers, ∫B = 1,
+// variance σ²) as K(t) = (1 + σ²) B(t) − σ²/2 (B(t + 1) + B(t − 1)): ∫K = 1 and its second
+// moment is 0, so blurring across r with K leaves any P(r) and L(r) that is locally
+// quadratic unchanged (P ∗ K = P + O(w⁴ P⁗)). K is as smooth as B, with B's support widened
+// by one knot each side. F is its integral; K′ and K″ serve the second-order terms of the
+// quadrature (evaluatePoints). P's kernel comes from the cubic B-spline (σ² = 1/3, K in
+// C², support [-3, 3]), L's from the quintic (σ² = 1/2, C⁴, support [-4, 4]).
 
-inline double bspline(double t)
+/// The cubic B-spline: support [-2, 2].
+struct CubicBSpline {
+    static constexpr double kHalfSupport = 2, kVariance = 1.0 / 3.0;
+    static double value(double t)
+    {
+        t = std::abs(t);
+        if (t >= 2) return 0.0;
+        if (t >= 1) return (2 - t) * (2 - t) * (2 - t) / 6.0;
+        return (4 - 6 * t * t + 3 * t * t * t) / 6.0;
+    }
+    static double integral(double t)  // ∫ from −∞ to t
+    {
+        if (t <= -2) return 0.0;
+        if (t >= 2) return 1.0;
+        if (t < 0) return 1.0 - integral(-t);
+        if (t >= 1) return 1.0 - (2 - t) * (2 - t) * (2 - t) * (2 - t) / 24.0;
+        return 0.5 + (4 * t - 2 * t * t * t + 0.75 * t * t * t * t) / 6.0;
+    }
+    static double derivative(double t)
+    {
+        const double a = std::abs(t);
+        if (a >= 2) return 0.0;
+        if (a >= 1) return (t > 0 ? -0.5 : 0.5) * (2 - a) * (2 - a);
+        return -2 * t + 1.5 * t * a;
+    }
+    static double secondDerivative(double t)
+    {
+        const double a = std::abs(t);
+        if (a >= 2) return 0.0;
+        if (a >= 1) return 2 - a;
+        return -2 + 3 * a;
+    }
+};
+
+/// The quintic B-spline: support [-3, 3]; pieces in x = |t| over 120.
+struct QuinticBSpline {
+    static constexpr double kHalfSupport = 3, kVariance = 0.5;
+    static double value(double t)
+    {
+        const double x = std::abs(t), x2 = x * x;
+        if (x >= 3) return 0.0;
+        if (x >= 2) return std::pow(3 - x, 5) / 120.0;
+        if (x >= 1) return (51 + x * (75 + x * (-210 + x * (150 + x * (-45 + 5 * x))))) / 120.0;
+        return (66 + x2 * (-60 + x2 * (30 - 10 * x))) / 120.0;
+    }
+    static double integral(double t)
+    {
+        if (t <= -3) return 0.0;
+        if (t >= 3) return 1.0;
+        if (t < 0) return 1.0 - integral(-t);
+        if (t >= 2) return 1.0 - std::pow(3 - t, 6) / 720.0;
+        const auto middle = [](double x) {  // 120 ∫ of the middle piece
+            return x * (51 + x * (37.5 + x * (-70 + x * (37.5 + x * (-9 + x * 5.0 / 6.0)))));
+        };
+        const double firstPiece = 66 - 20 + 6 - 10.0 / 6.0;  // 120 ∫ over [0, 1]
+        if (t >= 1) return 0.5 + (firstPiece + middle(t) - middle(1)) / 120.0;
+        const double t2 = t * t;
+        return 0.5 + t * (66 + t2 * (-20 + t2 * (6 - t * 10.0 / 6.0))) / 120.0;
+    }
+    static double derivative(double t)
+    {
+        const double x = std::abs(t), s = t < 0 ? -1.0 : 1.0;
+        if (x >= 3) return 0.0;
+        if (x >= 2) return -s * std::pow(3 - x, 4) / 24.0;
+        if (x >= 1) return s * (75 + x * (-420 + x * (450 + x * (-180 + 25 * x)))) / 120.0;
+        return s * x * (-120 + x * x * (120 - 50 * x)) / 120.0;
+    }
+    static double secondDerivative(double t)
+    {
+        const double x = std::abs(t);
+        if (x >= 3) return 0.0;
+        if (x >= 2) return std::pow(3 - x, 3) / 6.0;
+        if (x >= 1) return (-420 + x * (900 + x * (-540 + 100 * x))) / 120.0;
+        return (-120 + x * x * (360 - 200 * x)) / 120.0;
+    }
+};
+
+/// (1 + σ²) f(t) − σ²/2 (f(t + 1) + f(t − 1)): the kernel K from B (or F, K′, K″ from B's).
+template <class Spline, class Function>
+inline double fourthOrder(Function f, double t)
 {
-    t = std::abs(t);
-    if (t >= 2) return 0.0;
-    if (t >= 1) return (2 - t) * (2 - t) * (2 - t) / 6.0;
-    return (4 - 6 * t * t + 3 * t * t * t) / 6.0;
+    constexpr double s = Spline::kVariance;
+    return (1 + s) * f(t) - 0.5 * s * (f(t + 1) + f(t - 1));
 }
 
-inline double bsplineIntegral(double t)
-{
-    if (t <= -2) return 0.0;
-    if (t >= 2) return 1.0;
-    if (t < 0) return 1.0 - bsplineIntegral(-t);
-    if (t >= 1) return 1.0 - (2 - t) * (2 - t) * (2 - t) * (2 - t) / 24.0;
-    return 0.5 + (4 * t - 2 * t * t * t + 0.75 * t * t * t * t) / 6.0;
-}
-
-inline double bsplineDerivative(double t)
-{
-    const double a = std::abs(t);
-    if (a >= 2) return 0.0;
-    if (a >= 1) return (t > 0 ? -0.5 : 0.5) * (2 - a) * (2 - a);
-    return -2 * t + 1.5 * t * a;
-}
-
-inline double bsplineSecondDerivative(double t)
-{
-    const double a = std::abs(t);
-    if (a >= 2) return 0.0;
-    if (a >= 1) return 2 - a;
-    return -2 + 3 * a;
-}
-
-/// 4/3 f(t) − 1/6 (f(t + 1) + f(t − 1)): the kernel K from B (or F, K′, K″ from B's).
-template <class Spline>
-inline double fourthOrder(Spline spline, double t)
-{
-    return 4.0 / 3.0 * spline(t) - (spline(t + 1) + spline(t - 1)) / 6.0;
-}
-
-constexpr double kKernelHalfSupport = 3.0;  // K vanishes beyond ±3 knots
-/// Knot spacing of L's kernel in cells of the level: wide enough that the samples'
-/// irregular shapes average out (with 1.75 the plane's mean L̂ error is 7.8e-4, not 2.3e-4,
-/// and the sphere's max 1.7e-3, not 1.4e-3), and narrow against the kinks of L(r). The same
-/// on the finest level, whose samples hold only a few triangle pieces each.
-constexpr double kLineKernelCells = 2.0;
-/// Knot spacing of P's kernel: one cell. P sums areas, so a sample's shape matters far less
-/// than for L (the plane's max P̂ error 9e-4), and the blur of P(r)'s kinks, where a sphere
-/// meets a crease, is what remains against the exact mode: on the tablet test P̂'s worst
-/// mean difference fell from 1.9e-3 (2 cells, as L) to 7.7e-4 and its max from 2.2e-2 to
+using PatchSpline = CubicBSpline;
+using LineSpline = QuinticBSpline;
+/// How many knots each kernel reaches to either side.
+constexpr double kPatchHalfSupport = PatchSpline::kHalfSupport + 1;
+constexpr double kLineHalfSupport = LineSpline::kHalfSupport + 1;
+/// Knot spacing of P's kernel in cells of the level: one cell. P sums areas, so a sample's
+/// shape matters little (the plane's max P̂ error 9e-4), and the blur of P(r)'s kinks, where
+/// a sphere meets a crease, is what remains against the exact mode: on the tablet test P̂'s
+/// worst mean difference fell from 1.9e-3 (2 cells) to 7.7e-4 and its max from 2.2e-2 to
 /// 9.1e-3 (with the fit of interpolateFromSamples).
 constexpr double kPatchKernelCells = 1.0;
+/// Knot spacing of L's kernel in cells of the level: 1.25 cells, 1.5 on the finest level.
+/// L(r) has square-root onsets (a sphere becoming tangent to a facet, or meeting the
+/// bottom of a groove), and blurring them across r is what L̂ differs from the exact mode
+/// by, in proportion to the kernel's width. The quintic kernel is smooth enough for the
+/// samples' irregular shapes to average out at little more than a cell, where the cubic one
+/// (third derivative jumping at the knots) needed two. Narrower still, the shapes show
+/// through: with one cell the sphere's max |ΔL̂| is 2.7e-3 on level 1 and 6.6e-3 on the
+/// finest level (whose samples hold only a few triangle pieces each), over the 2e-3 of
+/// issue 3; with these spacings it is 1.4e-3, and the tablet's worst mean difference from
+/// the exact mode 2.7e-3 (3.6e-3 with the cubic kernel of two cells).
+constexpr double kLineKernelCells = 1.25;
+constexpr double kLineKernelCellsFinest = 1.5;
 /// Histogram bins per cell. Linear sharing between bin centres blurs d by a tent of
 /// variance bin²/6; few bins keep the weighted sums per radius cheap.
 constexpr int kBinsPerCell = 8;
@@ -365,17 +423,30 @@ constexpr int kBinsPerCell = 8;
 constexpr std::size_t kChannels = 4;
 typedef float Channels __attribute__((vector_size(16)));
 
-/// The kernel's knot spacing at radius r on a level of cell h: @p cells cells, but at most
-/// r/3, so that the kernel stays within d >= 0 (small radii on the finest level).
-inline double kernelKnotSpacing(double r, double h, double cells)
+/// A kernel's knot spacing at radius r on a level of cell h: @p cells cells, but at most
+/// r / @p halfSupport, so that the kernel stays within d >= 0 (small radii on the finest
+/// level).
+inline double kernelKnotSpacing(double r, double h, double cells, double halfSupport)
 {
-    return std::min(cells * h, r / kKernelHalfSupport);
+    return std::min(cells * h, r / halfSupport);
 }
 
-/// How far from a point a radius's kernels reach: r + 3w, w that of L (the wider).
-inline double kernelReach(double r, double h)
+/// P's knot spacing at radius r on a level of cell h.
+inline double patchKnotSpacing(double r, double h)
 {
-    return r + kKernelHalfSupport * kernelKnotSpacing(r, h, kLineKernelCells);
+    return kernelKnotSpacing(r, h, kPatchKernelCells, kPatchHalfSupport);
+}
+/// L's knot spacing at radius r on level @p level (cell h).
+inline double lineKnotSpacing(double r, double h, int level)
+{
+    return kernelKnotSpacing(r, h, level == 0 ? kLineKernelCellsFinest : kLineKernelCells, kLineHalfSupport);
+}
+
+/// How far from a point a radius's kernels reach on level @p level (cell h): the farther of
+/// P's and L's.
+inline double kernelReach(double r, double h, int level)
+{
+    return r + std::max(kPatchHalfSupport * patchKnotSpacing(r, h), kLineHalfSupport * lineKnotSpacing(r, h, level));
 }
 
 /// The 4 floats at @p from as one vector (an unaligned load, without aliasing floats).
@@ -447,7 +518,52 @@ struct LevelKernel {
     /// Per radius, the bins [first, last) of the kernel's support, an even number of them.
     /// Below first, P's weights are those of a whole area, (1, 0): a running sum of areas.
     std::vector<std::pair<int, int>> patchBins;
+    std::vector<double> lineKnots;  // L's knot spacing per radius
 };
+
+/// The kernel of the radii @p r (ascending) on a level of cell @p h: weights per radius and
+/// bin centre d_b = (b + 1/2)·bin (paper Eq. 2 for P and L as sums over the distance
+/// histogram): f(d) = F((r − d)/w) for P, K((d − r)/w)/w for L (coarea formula), and f″/2
+/// for the channels a·q and a·g·q (evaluatePoints).
+LevelKernel makeLevelKernel(const std::vector<double>& radii, double h, int level)
+{
+    LevelKernel kernel;
+    kernel.bin = h / kBinsPerCell;
+    kernel.numRadii = int(radii.size());
+    for (double r : radii) kernel.lineKnots.push_back(lineKnotSpacing(r, h, level));
+    kernel.reach = kernelReach(radii.back(), h, level);
+    kernel.reachCells = int(std::ceil(kernel.reach / h)) + 1;
+    kernel.numBins = int(std::ceil(kernel.reach / kernel.bin)) + 2;  // bins beyond reach: 0
+    kernel.weights.assign(radii.size() * kChannels * std::size_t(kernel.numBins), 0.0f);
+    for (std::size_t k = 0; k < radii.size(); ++k) {
+        // w for L, wp for P: the bins [whole, inside) cover both supports.
+        const double r = radii[k], w = kernel.lineKnots[k], wp = patchKnotSpacing(r, h);
+        int whole = 0, inside = 0;  // whole areas on bins [0, whole), nothing from inside on
+        for (int b = 0; b < kernel.numBins; ++b) {
+            const double d = (b + 0.5) * kernel.bin, tp = (r - d) / wp, tl = (d - r) / w;
+            const bool patchWhole = tp >= kPatchHalfSupport, patchNone = tp <= -kPatchHalfSupport;
+            const bool lineNone = std::abs(tl) >= kLineHalfSupport;
+            if (patchWhole && lineNone && whole == b) {
+                whole = b + 1;
+                continue;
+            }
+            if (patchNone && lineNone) continue;
+            inside = b + 1;
+            float* at = kernel.weights.data() + (k * kernel.numBins + std::size_t(b)) * kChannels;
+            // (Outside a kernel's support these give exactly 1 or 0.)
+            at[0] = float(fourthOrder<PatchSpline>(PatchSpline::integral, tp));                            // P: f
+            at[1] = float(fourthOrder<LineSpline>(LineSpline::value, tl) / w);                             // L: f
+            at[2] = float(0.5 * fourthOrder<PatchSpline>(PatchSpline::derivative, tp) / (wp * wp));        // P: f″/2
+            at[3] = float(0.5 * fourthOrder<LineSpline>(LineSpline::secondDerivative, tl) / (w * w * w));  // L: f″/2
+        }
+        // An even number of bins: one more with weights 0 if needed (d < reach, so
+        // inside <= numBins − 2).
+        inside = std::max(whole, inside);
+        inside += (inside - whole) % 2;
+        kernel.patchBins.push_back({whole, inside});
+    }
+    return kernel;
+}
 
 /// Calls @p visit(s) for the samples of @p level in the 8³-cell blocks that overlap the
 /// level-l cells [lo, hi] (per axis, inclusive).
@@ -767,8 +883,9 @@ std::vector<int> patchLineLevelOfRadius(const std::vector<double>& radii, double
     // coarsest cell, extending the level below from the radius before to r costs
     // 16 (ρ_h(r)² − ρ_h(r_prev)²) / c⁴, and the coarsest level's own pass ρ_c(r)² / c⁴.
     const double r = radii[n - 1], below = h0 * std::ldexp(1.0, level[n - 1] - 1);
-    const double extend = 16.0 * (std::pow(kernelReach(r, below), 2) - std::pow(kernelReach(radii[n - 2], below), 2));
-    if (extend <= std::pow(kernelReach(r, 2.0 * below), 2)) --level[n - 1];
+    const int lb = level[n - 1] - 1;
+    const double extend = 16.0 * (std::pow(kernelReach(r, below, lb), 2) - std::pow(kernelReach(radii[n - 2], below, lb), 2));
+    if (extend <= std::pow(kernelReach(r, 2.0 * below, lb + 1), 2)) --level[n - 1];
     return level;
 }
 
@@ -822,56 +939,18 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
             if (result.levelOfRadius[j] == l) levelRadii.push_back(int(j));
         if (levelRadii.empty()) continue;
         const Level& level = levels[std::size_t(l)];
-        LevelKernel kernel;
-        kernel.bin = level.h / kBinsPerCell;
-        kernel.numRadii = int(levelRadii.size());
-        std::vector<double> kw(levelRadii.size());  // L's knot spacing per radius
-        for (std::size_t k = 0; k < kw.size(); ++k)
-            kw[k] = kernelKnotSpacing(radii[std::size_t(levelRadii[k])], level.h, kLineKernelCells);
-        kernel.reach = kernelReach(radii[std::size_t(levelRadii.back())], level.h);
-        kernel.reachCells = int(std::ceil(kernel.reach / level.h)) + 1;
-        kernel.numBins = int(std::ceil(kernel.reach / kernel.bin)) + 2;  // bins beyond reach: 0
-        // Weights per radius and bin centre d_b = (b + 1/2)·bin (paper Eq. 2 for P and L as
-        // sums over the distance histogram): f(d) = F((r − d)/w) for P, K((d − r)/w)/w for
-        // L (coarea formula), and f″/2 for the channels a·q and a·g·q (evaluatePoints).
-        kernel.weights.assign(kw.size() * kChannels * std::size_t(kernel.numBins), 0.0f);
+        std::vector<double> levelR;
+        for (int j : levelRadii) levelR.push_back(radii[std::size_t(j)]);
+        const LevelKernel kernel = makeLevelKernel(levelR, level.h, l);
+        const std::vector<double>& kw = kernel.lineKnots;
         const double binVariance = kernel.bin * kernel.bin / 6.0;
-        for (std::size_t k = 0; k < kw.size(); ++k) {
-            // w for L, wp for P (narrower): the bins [whole, inside) cover both supports.
-            const double r = radii[std::size_t(levelRadii[k])], w = kw[k];
-            const double wp = kernelKnotSpacing(r, level.h, kPatchKernelCells);
-            int whole = 0, inside = 0;  // whole areas on bins [0, whole), nothing from inside on
-            for (int b = 0; b < kernel.numBins; ++b) {
-                const double d = (b + 0.5) * kernel.bin, tp = (r - d) / wp, tl = (d - r) / w;
-                const bool patchWhole = tp >= kKernelHalfSupport, patchNone = tp <= -kKernelHalfSupport;
-                const bool lineNone = std::abs(tl) >= kKernelHalfSupport;
-                if (patchWhole && lineNone && whole == b) {
-                    whole = b + 1;
-                    continue;
-                }
-                if (patchNone && lineNone) continue;
-                inside = b + 1;
-                float* at = kernel.weights.data() + (k * kernel.numBins + std::size_t(b)) * kChannels;
-                // (Outside a kernel's support these give exactly 1 or 0.)
-                at[0] = float(fourthOrder(bsplineIntegral, tp));                              // P: f
-                at[1] = float(fourthOrder(bspline, tl) / w);                                  // L: f
-                at[2] = float(0.5 * fourthOrder(bsplineDerivative, tp) / (wp * wp));          // P: f″/2
-                at[3] = float(0.5 * fourthOrder(bsplineSecondDerivative, tl) / (w * w * w));  // L: f″/2
-            }
-            // An even number of bins: one more with weights 0 if needed (d < reach, so
-            // inside <= numBins − 2).
-            inside = std::max(whole, inside);
-            inside += (inside - whole) % 2;
-            kernel.patchBins.push_back({whole, inside});
-        }
-
         // A value is masked when the kernel's reach, plus the spread of a sample, gets to a
-        // border: r + max(3w, 4h) + 2 h0, with h the cell of the radius's level in the V/S
+        // border: r + max(4w, 4h) + 2 h0, with h the cell of the radius's level in the V/S
         // plan, so at least where V and S are (r + 4h + 2 h0), also for a merged level.
         std::vector<double> maskReach(kw.size());  // per radius of the level
         for (std::size_t k = 0; k < kw.size(); ++k) {
             const std::size_t j = std::size_t(levelRadii[k]);
-            maskReach[k] = radii[j] + std::max(kKernelHalfSupport * kw[k], 4.0 * h0 * std::ldexp(1.0, planLevel[j])) + 2.0 * h0;
+            maskReach[k] = radii[j] + std::max(kLineHalfSupport * kw[k], 4.0 * h0 * std::ldexp(1.0, planLevel[j])) + 2.0 * h0;
         }
         const auto masked = [&](std::size_t i, std::size_t k) {
             return !options.borderDistance.empty() && maskReach[k] > options.borderDistance[i];
