@@ -14,8 +14,10 @@
 ///    (û = (x − p)/d). Then P(r) = Σ a·F((r − d)/w) and, by the coarea formula
 ///    L = ∫_M δ(|x − p| − r)·|∇_M |x − p|| dA, L(r) = Σ a·g·K((d − r)/w)/w (paper Eq. 2),
 ///    with K a kernel of knot spacing w and F its integral, and all radii of a level share
-///    the pass. L's w is 2 cells (at most r/3), P's 1 cell: P sums areas and tolerates a
-///    sharper kernel, which blurs the kinks of P(r) (a sphere meeting a crease) less.
+///    the pass. P's K comes from the cubic B-spline with w = 1 cell (at most r/3), L's from
+///    the quintic one, smoother, with w = 1.25 cells, 1.5 on the finest level (at most
+///    r/4): narrow kernels blur the kinks and onsets of P(r) and L(r) less, and L, a
+///    density, needs the smoother kernel for the samples' shapes to average out.
 /// 4. K = 4/3 B(t) − 1/6 (B(t + 1) + B(t − 1)), B the cubic B-spline: ∫K = 1, zero second
 ///    moment, C², support ±3w. So the blur across r leaves any locally quadratic P(r) and
 ///    L(r) unchanged (planes, spheres, cones of edges and corners) without a correction.
@@ -42,8 +44,8 @@ struct PatchLineOptions {
     bool computePatch = true;        ///< P
     bool computeLine = true;         ///< L
     /// Per-vertex distance to the nearest border (mesh/border_distance.h); empty = closed.
-    /// Radius r_j of vertex i is masked (NaN) when r_j + max(3 w_j, 4 h_level) + 2 h_0 >
-    /// borderDistance[i] (w_j L's kernel's knot spacing, at most r_j/3): the reach of the
+    /// Radius r_j of vertex i is masked (NaN) when r_j + max(4 w_j, 4 h_level) + 2 h_0 >
+    /// borderDistance[i] (w_j L's kernel's knot spacing, at most r_j/4): the reach of the
     /// kernel, at least V and S's margin (so P and L are masked wherever V and S are).
     std::vector<double> borderDistance;
 };
@@ -62,10 +64,11 @@ struct PatchLineResult {
 
 /// The sample level of each radius: gridLevelOfRadius, except that a coarsest level
 /// holding a single radius r joins the level below when that costs no more. Its own pass
-/// would reach 2r (kernel knots r/3 at r/h = 6) for one radius; extending the level below
-/// from the radius before reaches only a little further, on 4 times as many points and
-/// samples, and halves the kernel there (r/6): with N = 16 radii this merges whenever the
-/// coarsest level holds R alone, the usual case (1.1M-vertex benchmark, tablet test).
+/// would reach about 1.8r (L's kernel knots 1.25 cells at r/h = 6) for one radius;
+/// extending the level below from the radius before reaches only a little further, on 4
+/// times as many points and samples, and halves the kernel there: with N = 16 radii this
+/// merges whenever the coarsest level holds R alone, the usual case (1.1M-vertex
+/// benchmark, tablet test).
 std::vector<int> patchLineLevelOfRadius(const std::vector<double>& radii, double h0,
                                         double minCellsPerRadius);
 
