@@ -518,7 +518,6 @@ struct LevelKernel {
     /// Per radius, the bins [first, last) of the kernel's support, an even number of them.
     /// Below first, P's weights are those of a whole area, (1, 0): a running sum of areas.
     std::vector<std::pair<int, int>> patchBins;
-    std::vector<double> lineKnots;  // L's knot spacing per radius
 };
 
 /// The kernel of the radii @p r (ascending) on a level of cell @p h: weights per radius and
@@ -530,14 +529,13 @@ LevelKernel makeLevelKernel(const std::vector<double>& radii, double h, int leve
     LevelKernel kernel;
     kernel.bin = h / kBinsPerCell;
     kernel.numRadii = int(radii.size());
-    for (double r : radii) kernel.lineKnots.push_back(lineKnotSpacing(r, h, level));
     kernel.reach = kernelReach(radii.back(), h, level);
     kernel.reachCells = int(std::ceil(kernel.reach / h)) + 1;
     kernel.numBins = int(std::ceil(kernel.reach / kernel.bin)) + 2;  // bins beyond reach: 0
     kernel.weights.assign(radii.size() * kChannels * std::size_t(kernel.numBins), 0.0f);
     for (std::size_t k = 0; k < radii.size(); ++k) {
         // w for L, wp for P: the bins [whole, inside) cover both supports.
-        const double r = radii[k], w = kernel.lineKnots[k], wp = patchKnotSpacing(r, h);
+        const double r = radii[k], w = lineKnotSpacing(r, h, level), wp = patchKnotSpacing(r, h);
         int whole = 0, inside = 0;  // whole areas on bins [0, whole), nothing from inside on
         for (int b = 0; b < kernel.numBins; ++b) {
             const double d = (b + 0.5) * kernel.bin, tp = (r - d) / wp, tl = (d - r) / w;
@@ -942,15 +940,15 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         std::vector<double> levelR;
         for (int j : levelRadii) levelR.push_back(radii[std::size_t(j)]);
         const LevelKernel kernel = makeLevelKernel(levelR, level.h, l);
-        const std::vector<double>& kw = kernel.lineKnots;
         const double binVariance = kernel.bin * kernel.bin / 6.0;
         // A value is masked when the kernel's reach, plus the spread of a sample, gets to a
-        // border: r + max(4w, 4h) + 2 h0, with h the cell of the radius's level in the V/S
-        // plan, so at least where V and S are (r + 4h + 2 h0), also for a merged level.
-        std::vector<double> maskReach(kw.size());  // per radius of the level
-        for (std::size_t k = 0; k < kw.size(); ++k) {
-            const std::size_t j = std::size_t(levelRadii[k]);
-            maskReach[k] = radii[j] + std::max(kLineHalfSupport * kw[k], 4.0 * h0 * std::ldexp(1.0, planLevel[j])) + 2.0 * h0;
+        // border: max(kernelReach, r + 4h) + 2 h0, with h the cell of the radius's level in
+        // the V/S plan, so at least where V and S are (r + 4h + 2 h0), also for a merged level.
+        std::vector<double> maskReach(levelR.size());  // per radius of the level
+        for (std::size_t k = 0; k < levelR.size(); ++k) {
+            const double r = levelR[k];
+            const double vs = r + 4.0 * h0 * std::ldexp(1.0, planLevel[std::size_t(levelRadii[k])]);
+            maskReach[k] = std::max(kernelReach(r, level.h, l), vs) + 2.0 * h0;
         }
         const auto masked = [&](std::size_t i, std::size_t k) {
             return !options.borderDistance.empty() && maskReach[k] > options.borderDistance[i];

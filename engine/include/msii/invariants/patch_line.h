@@ -18,9 +18,10 @@
 ///    the quintic one, smoother, with w = 1.25 cells, 1.5 on the finest level (at most
 ///    r/4): narrow kernels blur the kinks and onsets of P(r) and L(r) less, and L, a
 ///    density, needs the smoother kernel for the samples' shapes to average out.
-/// 4. K = 4/3 B(t) − 1/6 (B(t + 1) + B(t − 1)), B the cubic B-spline: ∫K = 1, zero second
-///    moment, C², support ±3w. So the blur across r leaves any locally quadratic P(r) and
-///    L(r) unchanged (planes, spheres, cones of edges and corners) without a correction.
+/// 4. K = (1 + σ²) B(t) − σ²/2 (B(t + 1) + B(t − 1)), B the B-spline (variance σ²): ∫K = 1,
+///    zero second moment, support ±3w (cubic) or ±4w (quintic). So the blur across r leaves
+///    any locally quadratic P(r) and L(r) unchanged (planes, spheres, cones of edges and
+///    corners) without a correction.
 /// 5. Each sample stands for its area spread with its covariance: a second-order quadrature
 ///    (the mean distance d + (tr C − ûᵀCû)/(2d), and f″/2·ûᵀCû in channels of their own).
 /// 6. Coarse levels with fewer samples than vertices evaluate at the samples and fit a plane
@@ -45,8 +46,9 @@ struct PatchLineOptions {
     bool computeLine = true;         ///< L
     /// Per-vertex distance to the nearest border (mesh/border_distance.h); empty = closed.
     /// Radius r_j of vertex i is masked (NaN) when r_j + max(4 w_j, 4 h_level) + 2 h_0 >
-    /// borderDistance[i] (w_j L's kernel's knot spacing, at most r_j/4): the reach of the
-    /// kernel, at least V and S's margin (so P and L are masked wherever V and S are).
+    /// borderDistance[i] (w_j the knot spacing of L's kernel, the wider, at most r_j/4): the
+    /// reach of the kernels, at least V and S's margin (so P and L are masked wherever V
+    /// and S are).
     std::vector<double> borderDistance;
 };
 
