@@ -13,6 +13,9 @@
 #include <cstdint>
 #include <cstdio>
 #include <functional>
+#include <iomanip>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "../support/rotation.h"
@@ -140,6 +143,57 @@ TEST(VolumeSphere, FlatPlaneIsOneHalf)
     for (std::size_t k = 0; k < t.checkedRadii; ++k) {
         EXPECT_LE(t.maxV[k], 5e-4) << "radius index " << k;
         EXPECT_LE(t.maxS[k], 5e-4) << "radius index " << k;
+    }
+}
+
+TEST(VolumeSphere, MostlyMaskedPatchIsReported)
+{
+    // The rule: more than half masked at the largest radius; names the largest radius with
+    // at least half unmasked.
+    EXPECT_EQ(mostlyMaskedWarning({1, 2, 3}, {5, 5, 5}, 10), "");
+    const std::string some = mostlyMaskedWarning({1, 2, 3}, {0, 3, 6}, 10);
+    EXPECT_NE(some.find("60 % of the vertices are masked"), std::string::npos) << some;
+    EXPECT_NE(some.find("at r = 2 at least half"), std::string::npos) << some;
+    const std::string all = mostlyMaskedWarning({1, 2, 3}, {6, 7, 8}, 10);
+    EXPECT_NE(all.find("even at the smallest radius"), std::string::npos) << all;
+
+    // A 12 mm patch: with R = 0.8 most vertices keep their values, with R = 3 the border band
+    // covers most of it, and the radius named keeps at least half.
+    samples::HeightFieldOptions ho;
+    ho.kind = samples::HeightFieldKind::Plane;
+    ho.width = 12;
+    ho.height = 12;
+    ho.spacing = 0.1;
+    ho.noise = 0;
+    for (const double radius : {0.8, 3.0}) {
+        TriMesh mesh = samples::makeHeightField(ho);
+        ComputeOptions o;
+        o.radius = radius;
+        o.computePatch = o.computeLine = false;
+        const ComputeResult res = computeInvariants(mesh, o);
+        const auto share = [&](std::size_t j) {
+            const auto& column = res.invariants.volume[j];
+            return double(std::count_if(column.begin(), column.end(), [](float v) { return std::isnan(v); })) /
+                   double(column.size());
+        };
+        const std::size_t last = res.invariants.radii.size() - 1;
+        std::string warning;
+        for (const auto& w : res.warnings)
+            if (w.find("masked (NaN)") != std::string::npos) warning = w;
+        SCOPED_TRACE("R = " + std::to_string(radius));
+        if (radius < 1) {
+            EXPECT_LT(share(last), 0.5);
+            EXPECT_EQ(warning, "");
+            continue;
+        }
+        EXPECT_GT(share(last), 0.8);
+        ASSERT_NE(warning, "");
+        std::size_t named = last;
+        while (named > 0 && share(named) > 0.5) --named;
+        ASSERT_LE(share(named), 0.5);
+        std::ostringstream r;
+        r << "at r = " << std::setprecision(3) << res.invariants.radii[named] << " at least half";
+        EXPECT_NE(warning.find(r.str()), std::string::npos) << warning;
     }
 }
 

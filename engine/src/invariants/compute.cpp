@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 
@@ -117,6 +118,39 @@ double coarsestPrecision(const ComputeOptions& options)
     return std::min(options.minVoxelsPerRadius, patchLinePrecision(options));
 }
 
+void countMaskedVertices(const ComputeResult& result, std::vector<std::size_t>& counts)
+{
+    for (const auto* columns : {&result.invariants.volume, &result.invariants.sphere, &result.patchLine.patch,
+                                &result.patchLine.line}) {
+        if (columns->empty()) continue;
+        counts.resize(columns->size(), 0);
+        for (std::size_t j = 0; j < columns->size(); ++j)
+            for (float v : (*columns)[j]) counts[j] += std::isnan(v);
+        return;
+    }
+}
+
+std::string mostlyMaskedWarning(const std::vector<double>& radii, const std::vector<std::size_t>& maskedPerRadius,
+                                std::size_t numVertices)
+{
+    if (numVertices == 0 || radii.empty() || maskedPerRadius.size() != radii.size()) return {};
+    const auto share = [&](std::size_t j) { return double(maskedPerRadius[j]) / double(numVertices); };
+    const std::size_t last = radii.size() - 1;
+    if (share(last) <= 0.5) return {};
+    std::ostringstream msg;
+    msg << std::setprecision(3) << int(std::lround(100.0 * share(last)))
+        << " % of the vertices are masked (NaN) at the largest radius " << radii[last]
+        << ", as their ball reaches a border of the open mesh (its edge or holes); ";
+    std::size_t kept = radii.size();  // the largest radius with at least half unmasked
+    for (std::size_t j = 0; j < radii.size(); ++j)
+        if (share(j) <= 0.5) kept = j;
+    if (kept == radii.size())
+        msg << "more than half are even at the smallest radius: fill the holes or use a much smaller --radius";
+    else
+        msg << "at r = " << radii[kept] << " at least half have values: a smaller --radius keeps more";
+    return msg.str();
+}
+
 ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Progress* progress)
 {
     const Stopwatch total;
@@ -206,6 +240,12 @@ ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Pr
         result.patchLine = computePatchLine(mesh, plOptions, progress);
         result.timings.samples = result.patchLine.samplingSeconds;
         result.timings.patchLine = result.patchLine.gatherSeconds;
+    }
+    if (!result.check.closed) {
+        std::vector<std::size_t> masked;
+        countMaskedVertices(result, masked);
+        if (std::string w = mostlyMaskedWarning(radii, masked, mesh.numVertices()); !w.empty())
+            result.warnings.push_back(std::move(w));
     }
     result.timings.total = total.seconds();
     return result;

@@ -235,6 +235,7 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
     const float nan = std::numeric_limits<float>::quiet_NaN();
     std::size_t computed = 0, masked = 0;
+    std::vector<std::size_t> maskedPerRadius;  // vertices, per radius (mostlyMaskedWarning)
     std::vector<std::uint32_t> local(nv, kNone), global;  // vertex numbers in and out of the tile
     for (int t = 0; t < n * n; ++t) {
         if (tiling.onlyTile >= 0 && t != tiling.onlyTile) continue;
@@ -285,6 +286,7 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
         global.clear();
         for (const auto& column : values.invariants.volume)  // counted as computeVolumeSphere does
             for (float v : column) masked += std::isnan(v);
+        countMaskedVertices(values, maskedPerRadius);
         const ComputeTimings& pt = values.timings;
         ComputeTimings& rt = result.timings;
         rt.levelSet += pt.levelSet, rt.occupancy += pt.occupancy, rt.stencils += pt.stencils;
@@ -297,6 +299,9 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
         ++computed;
     }
     result.invariants.numMaskedValues = masked;
+    if (!plan.check.closed && tiling.onlyTile < 0)
+        if (std::string w = mostlyMaskedWarning(radii, maskedPerRadius, nv); !w.empty())
+            result.warnings.push_back(std::move(w));
     if (info) {
         info->tilesPerAxis = n;
         info->tiles = computed;

@@ -76,6 +76,17 @@ double chooseVoxelSize(double medianEdge, const std::vector<double>& radii,
 /// @throw InvalidInputError as computeInvariants.
 ComputeResult prepareComputation(TriMesh& mesh, const ComputeOptions& options);
 
+/// Adds to @p counts (resized to the radii) the vertices whose value is NaN at each radius,
+/// in the first invariant computed (V, S, P, L): the masked ones, for a sum over tiles.
+void countMaskedVertices(const ComputeResult& result, std::vector<std::size_t>& counts);
+
+/// A warning when more than half of @p numVertices are masked at the largest radius (their
+/// ball reaches a border of the open mesh: many holes, or a radius large for the patch),
+/// naming the largest radius at which at least half have values; empty otherwise.
+std::string mostlyMaskedWarning(const std::vector<double>& radii,
+                                const std::vector<std::size_t>& maskedPerRadius,
+                                std::size_t numVertices);
+
 /// Runs the job on @p mesh (which may be modified by repair).
 /// @throw InvalidInputError for unusable meshes or parameters, with one clear sentence.
 ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options,
