@@ -79,6 +79,18 @@ TriMesh testSphere(bool cavity)
     return samples::makeSphere(o);
 }
 
+/// A flat 12 × 12 mm open patch, 0.1 mm spacing, no noise.
+TriMesh flatPatch()
+{
+    samples::HeightFieldOptions ho;
+    ho.kind = samples::HeightFieldKind::Plane;
+    ho.width = 12;
+    ho.height = 12;
+    ho.spacing = 0.1;
+    ho.noise = 0;
+    return samples::makeHeightField(ho);
+}
+
 ComputeOptions sphereOptions()
 {
     ComputeOptions o;
@@ -122,13 +134,7 @@ TEST(VolumeSphere, SphericalCavityMatchesClosedForm)
 
 TEST(VolumeSphere, FlatPlaneIsOneHalf)
 {
-    samples::HeightFieldOptions ho;
-    ho.kind = samples::HeightFieldKind::Plane;
-    ho.width = 12;
-    ho.height = 12;
-    ho.spacing = 0.1;
-    ho.noise = 0;
-    TriMesh mesh = samples::makeHeightField(ho);
+    TriMesh mesh = flatPatch();
     ComputeOptions o;
     o.radius = 2.0;
     const ComputeResult res = computeInvariants(mesh, o);
@@ -159,14 +165,8 @@ TEST(VolumeSphere, MostlyMaskedPatchIsReported)
 
     // A 12 mm patch: with R = 0.8 most vertices keep their values, with R = 3 the border band
     // covers most of it, and the radius named keeps at least half.
-    samples::HeightFieldOptions ho;
-    ho.kind = samples::HeightFieldKind::Plane;
-    ho.width = 12;
-    ho.height = 12;
-    ho.spacing = 0.1;
-    ho.noise = 0;
     for (const double radius : {0.8, 3.0}) {
-        TriMesh mesh = samples::makeHeightField(ho);
+        TriMesh mesh = flatPatch();
         ComputeOptions o;
         o.radius = radius;
         o.computePatch = o.computeLine = false;

@@ -45,8 +45,10 @@ double dependenceReach(const std::vector<double>& radii, double h0, double minCe
     for (std::size_t j = 0; j < radii.size(); ++j) {
         const double h = h0 * double(1 << levels[j]);
         // V and S: stencils and interpolation, r + 4h + 2h0. P and L: a vertex takes its
-        // values from samples within 2h, each sums the samples within r + 3w (3w <= r and
-        // <= 6h), and a sample holds surface within √3·h of its centroid plus a piece h0.
+        // values from samples within 2h, each sums the samples within its kernels' reach
+        // (P r + 3w, w <= r/3 and 1 cell; L r + 4w, w <= r/4 and 1.5 cells: at most
+        // r + min(r, 6h)), and a sample holds surface within √3·h of its centroid plus a
+        // piece h0.
         const double patchLine = std::min(radii[j], 6.0 * h) + (2.0 + std::sqrt(3.0)) * h + h0;
         reach = std::max(reach, radii[j] + std::max(4.0 * h + 2.0 * h0, patchLine));
     }

@@ -23,8 +23,8 @@ std::vector<int> gridLevelOfRadius(const std::vector<double>& radii, double h0,
 /// How far from a vertex its values may depend on the mesh, at most: max over the radii of
 /// r + max(4 h_l + 2 h0, min(r, 6 h_l) + (2 + √3) h_l + h0): V and S's stencils and
 /// interpolation reach r + 4 h_l + 2 h0; P and L's values come from samples within 2 h_l,
-/// whose kernel reaches r + 3w (w <= r/3, at most 2 cells) over cells of extent √3·h_l
-/// (patch_line.h). Border distances are searched a little beyond this, and tiles' halos
+/// whose kernels reach at most r + min(r, 6 h_l) (L's: r + 4w, w <= r/4 and 1.5 cells)
+/// over cells of extent √3·h_l (patch_line.h). Border distances are searched a little beyond this, and tiles' halos
 /// reach past it, so that a tile's own values are exactly those of the whole mesh.
 double dependenceReach(const std::vector<double>& radii, double h0, double minCellsPerRadius);
 
