@@ -120,8 +120,7 @@ TEST(MeshCheck, DegenerateFaces)
     EXPECT_TRUE(r.closed);  // edges are judged without the bad faces
     EXPECT_EQ(r.numUnreferencedVertices, 1u);
     EXPECT_EQ(r.firstProblem(),
-              "the mesh has 3 degenerate faces (repeated or invalid vertex indices, or zero area); "
-              "use --repair to drop them");
+              "the mesh has 3 degenerate faces (repeated or invalid vertex indices, or zero area)");
 
     // A sliver far below the resolution counts too; a small but real face does not.
     TriMesh slivers = octahedron();
@@ -141,11 +140,10 @@ TEST(MeshCheck, NonManifoldEdge)
     EXPECT_EQ(r.numNonManifoldEdges, 1u);
     EXPECT_EQ(r.numBorderEdges, 6u);
     EXPECT_FALSE(r.closed);
-    EXPECT_EQ(r.firstProblem(), "the mesh has 1 non-manifold edge (shared by more than two faces); "
-                                "use --repair to drop the faces around them");
+    EXPECT_EQ(r.firstProblem(), "the mesh has 1 non-manifold edge (shared by more than two faces)");
 }
 
-// --repair: the faces around non-manifold edges go, the others stay (in order), and the
+// Repair: the faces around non-manifold edges go, the others stay (in order), and the
 // rest is a valid open mesh.
 TEST(MeshCheck, RemoveNonManifoldFaces)
 {

@@ -428,9 +428,10 @@ TEST(MsiiCli, ComputeCollectionSkipsResumesAndReports)
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
 }
 
-// --repair drops the faces around a non-manifold edge (a fin glued onto a scan) and the
-// run succeeds with a warning; without it the run is refused with a hint.
-TEST(MsiiCli, RepairDropsFacesAroundNonManifoldEdges)
+// Repair is the default: the faces around a non-manifold edge (a fin glued onto a scan)
+// are dropped, the hole filled, and the run says so; --strict refuses the mesh instead, with
+// one line and no output.
+TEST(MsiiCli, RepairsByDefaultAndStrictRefuses)
 {
     TriMesh mesh = readMesh(smallPatch()).mesh;
     const Triangle t = mesh.triangles[mesh.numTriangles() / 2];
@@ -439,14 +440,27 @@ TEST(MsiiCli, RepairDropsFacesAroundNonManifoldEdges)
     const std::string fin = (tempDir() / "fin.ply").string();
     writePly(fin, mesh, {});
     const fs::path out = tempDir() / "fin.msii.ply";
-    RunResult r = runMsii("compute '" + fin + "' -r 0.8 -n 4 --output '" + out.string() + "'");
+    RunResult r = runMsii("compute '" + fin + "' -r 0.8 -n 4 --strict --output '" + out.string() + "'");
     EXPECT_EQ(r.code, 1);
-    EXPECT_NE(r.err.find("use --repair"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("1 non-manifold edge"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("without it msii repairs this"), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     EXPECT_FALSE(fs::exists(out));
-    r = runMsii("compute '" + fin + "' -r 0.8 -n 4 --repair --output '" + out.string() + "'");
+    r = runMsii("compute '" + fin + "' -r 0.8 -n 4 --output '" + out.string() + "'");
     EXPECT_EQ(r.code, 0) << r.err;
-    EXPECT_NE(r.err.find("removed the 3 faces around 1 non-manifold edges"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("removed the 3 faces around 1 non-manifold edge"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("filled 1 hole"), std::string::npos) << r.err;
     EXPECT_TRUE(fs::exists(out));
+    const std::string json = readFile((tempDir() / "fin.msii.json").string());
+    EXPECT_NE(json.find("\"non_manifold_faces_removed\""), std::string::npos);
+    EXPECT_NE(json.find("\"filled\": 1"), std::string::npos) << json;
+    // The output keeps the input's vertices and faces; filled_share is written.
+    const ReadMeshResult written = readMesh(out.string(), {true});
+    EXPECT_EQ(written.mesh.points.size(), mesh.points.size());
+    EXPECT_EQ(written.mesh.triangles, mesh.triangles);
+    bool hasShare = false;
+    for (const VertexProperty& p : written.vertexProperties) hasShare |= p.name == "filled_share";
+    EXPECT_TRUE(hasShare);
 }
 
 // --tiles and --memory-budget (issue 6): the tiled run writes the same file as the

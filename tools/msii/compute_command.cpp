@@ -12,6 +12,7 @@
 #include <msii/io/gigamesh_files.h>
 #include <msii/io/write_ply.h>
 #include <msii/mesh/mesh_stats.h>
+#include <msii/mesh/prepare_mesh.h>
 #include <msii/mesh/read_mesh.h>
 #include <msii/tiling/tiled_compute.h>
 
@@ -47,7 +48,8 @@ struct ComputeArgs {
     double precision = 6.0;
     double plPrecision = 0;  // 0 = as precision
     int threads = 0;
-    bool quiet = false, overwrite = false, repair = false, noSphere = false;
+    bool quiet = false, overwrite = false, repair = false, strict = false, noSphere = false;
+    double fillHoles = -1;      // longest hole border filled; -1 = pi R (default), 0 = none
     std::string invariants = "V,S,P,L";
     bool exact = false;
     std::string vertices;       // exact mode: comma-separated indices
@@ -235,6 +237,30 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     const double readSeconds = total.seconds();
     const std::size_t inputFaces = read.mesh.numTriangles();
 
+    // Mesh preparation: repair, holes. The computation runs on the prepared mesh; every
+    // column is mapped back to the input's vertices before it is written.
+    const Stopwatch prepareWatch;
+    PrepareMeshOptions prepareOptions;
+    prepareOptions.repair = !args.strict;
+    prepareOptions.maxHolePerimeter = args.fillHoles >= 0 ? args.fillHoles : defaultMaxHolePerimeter(args.radius);
+    prepareOptions.radius = args.radius;
+    PrepareMeshResult prepared;
+    try {
+        prepared = prepareMesh(read.mesh, prepareOptions);
+    } catch (const InvalidInputError& e) {
+        const std::string hint = args.strict && std::string(e.what()).find("repair is off") != std::string::npos
+                                     ? " (--strict; without it msii repairs this)"
+                                     : "";
+        throw InvalidInputError(fs::path(input).filename().string() + ": " + e.what() + hint);
+    }
+    const double prepareSeconds = prepareWatch.seconds();
+    if (!args.quiet)
+        for (const PrepareChange& c : prepared.changes)
+            std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), c.message.c_str());
+    std::vector<float> filledShare = prepared.filledShare.empty()
+                                         ? std::vector<float>(prepared.mesh.numVertices(), 0.0f)
+                                         : prepared.filledShare;
+
     ComputeOptions options;
     options.radius = args.radius;
     options.scales = args.scales;
@@ -246,9 +272,13 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     options.computePatch = sel.patch;
     options.computeLine = sel.line;
     options.exact = args.exact;
-    options.repair = args.repair;
     if (args.exact) {
-        options.exactVertices = exactVertices(args, read.mesh.numVertices());
+        // Input vertex numbers to the prepared mesh's.
+        for (std::uint32_t v : exactVertices(args, read.mesh.numVertices())) {
+            if (prepared.preparedOf[v] == PrepareMeshResult::kNoVertex)
+                throw InvalidInputError("--vertices: vertex " + std::to_string(v) + " belongs to no face");
+            options.exactVertices.push_back(prepared.preparedOf[v]);
+        }
         if (options.exactVertices.empty() && read.mesh.numVertices() > 20000 && !args.quiet)
             std::fprintf(stderr,
                          "msii: warning: %s: exact mode on all %zu vertices is slow; "
@@ -293,10 +323,28 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
             tilingOptions.tilesPerAxis = args.tiles;
             tilingOptions.onlyTile = args.tile;
             if (streamed) {
+                // Each prepared vertex of a tile goes to its input vertices (several where
+                // positions were merged; none for hole-filling vertices).
+                const InputVertexLists inputsOf = inputVerticesOf(prepared);
                 const auto sink = [&](const TileResult& part) {
                     const Stopwatch write;
-                    const std::vector<VertexProperty> props =
+                    std::vector<VertexProperty> props =
                         featureProperties(featuresOf(part.values.invariants, part.values.patchLine));
+                    std::vector<std::uint32_t> vertices;
+                    std::vector<std::uint32_t> rows;  // row of part.vertices for each input vertex
+                    for (std::size_t l = 0; l < part.vertices.size(); ++l)
+                        for (std::size_t k = inputsOf.offsets[part.vertices[l]]; k < inputsOf.offsets[part.vertices[l] + 1]; ++k) {
+                            vertices.push_back(inputsOf.inputs[k]);
+                            rows.push_back(std::uint32_t(l));
+                        }
+                    std::vector<float> share(part.vertices.size());
+                    for (std::size_t l = 0; l < part.vertices.size(); ++l) share[l] = filledShare[part.vertices[l]];
+                    props.push_back({"filled_share", std::move(share)});
+                    for (VertexProperty& p : props) {
+                        std::vector<float> expanded(rows.size());
+                        for (std::size_t i = 0; i < rows.size(); ++i) expanded[i] = p.values[rows[i]];
+                        p.values.swap(expanded);
+                    }
                     std::vector<const float*> columns;
                     for (const VertexProperty& p : props) columns.push_back(p.values.data());
                     if (!pieces) {
@@ -304,15 +352,20 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                         for (const VertexProperty& p : props) names.push_back(p.name);
                         pieces = std::make_unique<PlyPieceWriter>(output, read.mesh, names, plyOptionsFor(part.values));
                     }
-                    pieces->write(part.vertices, columns);
+                    if (!vertices.empty()) pieces->write(vertices, columns);
                     writeSeconds += write.seconds();
                 };
-                result = computeTiles(read.mesh, options, tilingOptions, sink, &tiledInfo, &progress);
+                result = computeTiles(prepared.mesh, options, tilingOptions, sink, &tiledInfo, &progress);
             } else {
-                result = computeTiled(read.mesh, options, tilingOptions, &tiledInfo, &progress);
+                result = computeTiled(prepared.mesh, options, tilingOptions, &tiledInfo, &progress);
             }
         } else {
-            result = computeInvariants(read.mesh, options, &progress);
+            result = computeInvariants(prepared.mesh, options, &progress);
+        }
+        if (!streamed) {
+            for (auto* columns : {&result.invariants.volume, &result.invariants.sphere, &result.patchLine.patch,
+                                  &result.patchLine.line})
+                for (std::vector<float>& column : *columns) column = toInputVertices(prepared, column);
         }
     } catch (const InvalidInputError& e) {
         throw InvalidInputError(fs::path(input).filename().string() + ": " + e.what());
@@ -333,7 +386,8 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     if (streamed) {
         pieces->commit();
     } else {
-        const std::vector<VertexProperty> props = featureProperties(featuresOf(inv, pl));
+        std::vector<VertexProperty> props = featureProperties(featuresOf(inv, pl));
+        props.push_back({"filled_share", toInputVertices(prepared, filledShare)});
         writePly(output, read.mesh, props, plyOptionsFor(result));
     }
     if (args.gigamesh) {
@@ -387,7 +441,8 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                         }()},
                        {"mode", args.exact ? "exact" : "fast"},
                        {"exact_vertices", options.exactVertices.size()},
-                       {"repair", args.repair},
+                       {"repair", !args.strict},
+                       {"max_hole_perimeter", prepareOptions.maxHolePerimeter},
                        {"threads", args.threads}};
     j["conventions"] = {{"V", "V/|B_r| in [0,1], flat plane 0.5, convex < 0.5"},
                         {"S", "S/(4 pi r^2) in [0,1], flat plane 0.5, convex < 0.5"},
@@ -401,7 +456,14 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     j["mesh"] = {{"vertices", st.numVertices},
                  {"faces", st.numTriangles},
                  {"faces_in_file", inputFaces},
-                 {"faces_removed", result.removedFaces},
+                 {"faces_removed", [&] {
+                      std::size_t removed = 0;
+                      for (const PrepareChange& c : prepared.changes)
+                          if (c.kind == "degenerate_faces_removed" || c.kind == "duplicate_faces_removed" ||
+                              c.kind == "non_manifold_faces_removed")
+                              removed += c.count;
+                      return removed;
+                  }()},
                  {"closed", result.check.closed},
                  {"border_edges", result.check.numBorderEdges},
                  {"bbox_min", {st.bboxMin.x, st.bboxMin.y, st.bboxMin.z}},
@@ -412,7 +474,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                  {"masked_values", inv.numMaskedValues}};
     j["level_set"] = {{"active_voxels", result.levelSetVoxels}, {"bytes", result.levelSetBytes}};
     const auto& t = result.timings;
-    j["timings_seconds"] = {{"read", readSeconds},     {"check", t.check},
+    j["timings_seconds"] = {{"read", readSeconds},     {"prepare", prepareSeconds}, {"check", t.check},
                             {"level_set", t.levelSet}, {"occupancy", t.occupancy},
                             {"stencils", t.stencils},  {"interpolation", t.interpolation},
                             {"samples", t.samples},    {"patch_line", t.patchLine},
@@ -424,7 +486,25 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                        {"largest_tile_vertices", tiledInfo.largestTileVertices},
                        {"halo", tiledInfo.haloWidth},
                        {"estimated_peak_bytes", tiledInfo.estimatedPeakBytes}};
+    j["preparation"] = {
+        {"changes", [&] {
+             nlohmann::json list = nlohmann::json::array();
+             for (const PrepareChange& c : prepared.changes)
+                 list.push_back({{"kind", c.kind}, {"count", c.count}, {"message", c.message}});
+             return list;
+         }()},
+        {"holes", {{"filled", prepared.holes.numFilled},
+                   {"largest_perimeter", prepared.holes.largestPerimeter},
+                   {"area_added", prepared.holes.areaAdded},
+                   {"left_open_too_large", prepared.holes.numTooLarge},
+                   {"left_open_outer_border", prepared.holes.numOuterBorders},
+                   {"not_filled_failed", prepared.holes.numFailed},
+                   {"max_perimeter", prepareOptions.maxHolePerimeter}}},
+        {"isolated_vertices", prepared.numIsolatedVertices},
+        {"prepared_vertices", prepared.mesh.numVertices()},
+        {"prepared_faces", prepared.mesh.numTriangles()}};
     j["warnings"] = result.warnings;
+    for (const PrepareChange& c : prepared.changes) j["warnings"].push_back(c.message);
     writeTextFileAtomic(sidecar, j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 
     if (!args.quiet)
@@ -612,9 +692,15 @@ std::function<int()> addComputeCommand(CLI::App& app)
     cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
     cmd->add_flag("-q,--quiet", args->quiet, "No progress, no summary; errors only");
     cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs");
-    cmd->add_flag("--repair", args->repair,
-                  "Drop degenerate and duplicate faces, and the faces around non-manifold edges, "
-                  "instead of stopping");
+    cmd->add_flag("--strict", args->strict,
+                  "Refuse meshes that need repair (duplicate or degenerate faces, non-manifold edges or "
+                  "vertices, vertices at the same position, inconsistent orientation) instead of repairing them");
+    cmd->add_flag("--repair", args->repair, "Repair is the default now; accepted for old scripts")->group("");
+    cmd->add_option("--fill-holes", args->fillHoles,
+                    "Fill holes whose border is at most SIZE long (mesh units), for the computation only; "
+                    "default pi*R (holes up to about R across); 0 fills none")
+        ->type_name("SIZE")
+        ->check(CLI::NonNegativeNumber);
     cmd->add_option("--invariants", args->invariants,
                     "Which invariants, comma-separated (default V,S,P,L)");
     cmd->add_flag("--no-sphere", args->noSphere, "Leave out S (same as omitting it from --invariants)");
@@ -676,7 +762,8 @@ std::function<int()> addComputeCommand(CLI::App& app)
                                            {"precision", args->precision}, {"pl_precision", args->plPrecision},
                                            {"voxel_size", args->voxelSize},
                                            {"invariants", args->invariants}, {"exact", args->exact},
-                                           {"repair", args->repair}};
+                                           {"strict", args->strict},
+                                           {"fill_holes", args->fillHoles}};
         std::size_t done = 0, skipped = 0;
         std::vector<std::string> failed;
         const bool terminal = !args->quiet && Progress::stderrIsTerminal();

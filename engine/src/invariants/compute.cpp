@@ -27,7 +27,7 @@ double chooseVoxelSize(double medianEdge, const std::vector<double>& radii,
     return std::max(0.5 * medianEdge, first / minVoxelsPerRadius);
 }
 
-ComputeResult prepareComputation(TriMesh& mesh, const ComputeOptions& options)
+ComputeResult prepareComputation(const TriMesh& mesh, const ComputeOptions& options)
 {
     if (!(options.radius > 0) || !std::isfinite(options.radius))
         throw InvalidInputError("the radius must be a positive number");
@@ -47,33 +47,13 @@ ComputeResult prepareComputation(TriMesh& mesh, const ComputeOptions& options)
     const Stopwatch stage;
     result.check = checkMesh(mesh);
     if (result.check.numNonFinitePoints > 0) throw InvalidInputError(result.check.firstProblem());
-    if (options.repair &&
-        (result.check.numDegenerateFaces > 0 || result.check.numDuplicateFaces > 0)) {
-        result.removedFaces = removeBadFaces(mesh, result.check);
-        std::ostringstream msg;
-        msg << "removed " << result.removedFaces << " degenerate or duplicate faces";
-        result.warnings.push_back(msg.str());
-        if (mesh.numTriangles() == 0) throw InvalidInputError("the mesh has no usable faces");
-        result.check = checkMesh(mesh);
-    }
-    if (options.repair && result.check.numNonManifoldEdges > 0) {
-        const std::size_t edges = result.check.numNonManifoldEdges;
-        const std::size_t removed = removeNonManifoldFaces(mesh);
-        result.removedFaces += removed;
-        std::ostringstream msg;
-        msg << "removed the " << removed << " faces around " << edges
-            << " non-manifold edges (values near the hole are masked like a border)";
-        result.warnings.push_back(msg.str());
-        if (mesh.numTriangles() == 0) throw InvalidInputError("the mesh has no usable faces");
-        result.check = checkMesh(mesh);
-    }
     if (const std::string problem = result.check.firstProblem(); !problem.empty())
         throw InvalidInputError(problem);
     if (result.check.numInconsistentEdges > 0) {
         std::ostringstream msg;
         msg << "the mesh is not consistently oriented (" << result.check.numInconsistentEdges
             << " edges are traversed the same way by both their faces), so its inside is "
-               "undefined; re-orient the faces coherently first";
+               "undefined; prepare it first (mesh/prepare_mesh.h)";
         throw InvalidInputError(msg.str());
     }
     result.stats = computeMeshStats(mesh);
@@ -151,7 +131,7 @@ std::string mostlyMaskedWarning(const std::vector<double>& radii, const std::vec
     return msg.str();
 }
 
-ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options, Progress* progress)
+ComputeResult computeInvariants(const TriMesh& mesh, const ComputeOptions& options, Progress* progress)
 {
     const Stopwatch total;
     ComputeResult result = prepareComputation(mesh, options);

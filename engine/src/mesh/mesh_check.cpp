@@ -96,13 +96,13 @@ std::string MeshCheckResult::firstProblem() const
                " with NaN or infinite coordinates";
     if (numDegenerateFaces > 0)
         return "the mesh has " + plural(numDegenerateFaces, "degenerate face", "degenerate faces") +
-               " (repeated or invalid vertex indices, or zero area); use --repair to drop them";
+               " (repeated or invalid vertex indices, or zero area)";
     if (numDuplicateFaces > 0)
         return "the mesh has " + plural(numDuplicateFaces, "duplicate face", "duplicate faces") +
-               " (same vertices as an earlier face); use --repair to drop them";
+               " (same vertices as an earlier face)";
     if (numNonManifoldEdges > 0)
         return "the mesh has " + plural(numNonManifoldEdges, "non-manifold edge", "non-manifold edges") +
-               " (shared by more than two faces); use --repair to drop the faces around them";
+               " (shared by more than two faces)";
     return {};
 }
 

@@ -153,7 +153,7 @@ namespace {
 
 /// The tiled computation; with @p keepColumns the result columns for the whole mesh count
 /// against the memory budget (computeTiled), else not (computeTiles).
-ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling, bool keepColumns,
+ComputeResult runTiles(const TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling, bool keepColumns,
                        const TileSink& sink, TiledComputeInfo* info, Progress* progress)
 {
     const Stopwatch total;
@@ -231,7 +231,6 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
     for (int t = 0; t < n * n; ++t) tilesWithVertices += ownVertices.begin(t) != ownVertices.end(t);
     ComputeOptions tileOptions = options;
     tileOptions.voxelSize = plan.voxelSize;  // the whole mesh's grid, so that tiles agree
-    tileOptions.repair = false;              // already done on the whole mesh
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
     const float nan = std::numeric_limits<float>::quiet_NaN();
     std::size_t computed = 0, masked = 0;
@@ -315,13 +314,13 @@ ComputeResult runTiles(TriMesh& mesh, const ComputeOptions& options, const Tilin
 
 } // namespace
 
-ComputeResult computeTiles(TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
+ComputeResult computeTiles(const TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
                            const TileSink& sink, TiledComputeInfo* info, Progress* progress)
 {
     return runTiles(mesh, options, tiling, false, sink, info, progress);
 }
 
-ComputeResult computeTiled(TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
+ComputeResult computeTiled(const TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
                            TiledComputeInfo* info, Progress* progress)
 {
     // Result columns for the whole mesh, NaN until a tile fills them.

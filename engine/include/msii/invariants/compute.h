@@ -34,7 +34,6 @@ struct ComputeOptions {
     /// exactVertices only (all vertices if empty); the others are NaN. Slow: for checking.
     bool exact = false;
     std::vector<std::uint32_t> exactVertices;
-    bool repair = false;            ///< drop degenerate and duplicate faces instead of failing
 };
 
 struct ComputeTimings {
@@ -50,7 +49,6 @@ struct ComputeResult {
     PatchLineResult patchLine;         ///< P and L (columns empty if not asked for)
     MeshStats stats;
     MeshCheckResult check;
-    std::size_t removedFaces = 0;      ///< with repair
     double voxelSize = 0;              ///< finest voxel edge used
     double bandHalfWidth = 0;          ///< voxels
     std::size_t levelSetVoxels = 0, levelSetBytes = 0;
@@ -71,10 +69,10 @@ double chooseVoxelSize(double medianEdge, const std::vector<double>& radii,
                        double minVoxelsPerRadius);
 
 /// The checks and set-up of computeInvariants without the computation: parameters, mesh
-/// check (and repair), statistics, voxel size and warnings, in a result whose feature columns
+/// check, statistics, voxel size and warnings, in a result whose feature columns
 /// are empty. Used by the tiled computation, which plans on the whole mesh.
 /// @throw InvalidInputError as computeInvariants.
-ComputeResult prepareComputation(TriMesh& mesh, const ComputeOptions& options);
+ComputeResult prepareComputation(const TriMesh& mesh, const ComputeOptions& options);
 
 /// Adds to @p counts (resized to the radii) the vertices whose value is NaN at each radius,
 /// in the first invariant computed (V, S, P, L): the masked ones, for a sum over tiles.
@@ -87,9 +85,10 @@ std::string mostlyMaskedWarning(const std::vector<double>& radii,
                                 const std::vector<std::size_t>& maskedPerRadius,
                                 std::size_t numVertices);
 
-/// Runs the job on @p mesh (which may be modified by repair).
+/// Runs the job on @p mesh, which must be usable as it is: prepare scans first with
+/// mesh/prepare_mesh.h (repair, hole filling), which is what `msii compute` does.
 /// @throw InvalidInputError for unusable meshes or parameters, with one clear sentence.
-ComputeResult computeInvariants(TriMesh& mesh, const ComputeOptions& options,
+ComputeResult computeInvariants(const TriMesh& mesh, const ComputeOptions& options,
                                 Progress* progress = nullptr);
 
 } // namespace msii

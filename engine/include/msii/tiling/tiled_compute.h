@@ -61,14 +61,14 @@ using TileSink = std::function<void(const TileResult&)>;
 /// computation next to the mesh (e.g. io/write_ply.h's PlyPieceWriter writes them straight
 /// to the output). Returns the plan, timings and counts, with empty feature columns.
 /// @throw as computeTiled, and whatever @p sink throws.
-ComputeResult computeTiles(TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
+ComputeResult computeTiles(const TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
                            const TileSink& sink, TiledComputeInfo* info = nullptr, Progress* progress = nullptr);
 
 /// Computes @p options on @p mesh tile by tile (see the file comment); the result has the
 /// same columns as computeInvariants (the exact mode is not tiled).
 /// @throw InvalidInputError as computeInvariants, and when the budget is too small for even
 /// one tile (the message says how much is needed).
-ComputeResult computeTiled(TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
+ComputeResult computeTiled(const TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
                            TiledComputeInfo* info = nullptr, Progress* progress = nullptr);
 
 } // namespace msii

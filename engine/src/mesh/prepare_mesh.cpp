@@ -1,0 +1,505 @@
+#include <msii/mesh/prepare_mesh.h>
+
+#include "blocks.h"
+
+#include <msii/core/errors.h>
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <numeric>
+#include <sstream>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace msii {
+
+namespace {
+
+using detail::forEachBlock;
+using detail::numBlocks;
+constexpr std::uint32_t kNone = PrepareMeshResult::kNoVertex;
+
+std::string plural(std::size_t n, const char* one, const char* many)
+{
+    return std::to_string(n) + " " + (n == 1 ? one : many);
+}
+
+std::uint32_t findRoot(std::vector<std::uint32_t>& parent, std::uint32_t v)
+{
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+}
+
+/// Bit pattern of a point, for exact equality of positions (0.0 and -0.0 are one position).
+std::array<std::uint64_t, 3> bitsOf(const Vec3& p)
+{
+    std::array<std::uint64_t, 3> b{};
+    for (int k = 0; k < 3; ++k) {
+        const double c = p[k] == 0.0 ? 0.0 : p[k];
+        std::memcpy(&b[std::size_t(k)], &c, sizeof c);
+    }
+    return b;
+}
+
+/// For each vertex the smallest-index vertex at exactly the same position (itself if none).
+std::vector<std::uint32_t> samePositionRepresentatives(const std::vector<Vec3>& points, std::size_t& numMerged)
+{
+    const std::size_t n = points.size();
+    // Sort (hash, index) pairs, then compare positions within runs of equal hashes.
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(n);
+    forEachBlock(n, [&](std::size_t, std::size_t begin, std::size_t end) {
+        for (std::size_t v = begin; v < end; ++v) {
+            const auto b = bitsOf(points[v]);
+            std::uint64_t h = b[0] * 0x9E3779B97F4A7C15ull;
+            h = (h ^ (h >> 29) ^ b[1]) * 0xBF58476D1CE4E5B9ull;
+            h = (h ^ (h >> 31) ^ b[2]) * 0x94D049BB133111EBull;
+            keys[v] = {h ^ (h >> 32), std::uint32_t(v)};
+        }
+    });
+    tbb::parallel_sort(keys.begin(), keys.end());
+    std::vector<std::uint32_t> rep(n);
+    std::iota(rep.begin(), rep.end(), 0u);
+    numMerged = 0;
+    for (std::size_t i = 0; i < n;) {
+        std::size_t j = i + 1;
+        while (j < n && keys[j].first == keys[i].first) ++j;
+        // Within the run (ascending indices), each vertex joins the first equal one.
+        for (std::size_t a = i; a < j; ++a) {
+            const std::uint32_t va = keys[a].second;
+            if (rep[va] != va) continue;
+            for (std::size_t b = a + 1; b < j; ++b) {
+                const std::uint32_t vb = keys[b].second;
+                if (rep[vb] == vb && bitsOf(points[va]) == bitsOf(points[vb])) {
+                    rep[vb] = va;
+                    ++numMerged;
+                }
+            }
+        }
+        i = j;
+    }
+    return rep;
+}
+
+/// Triangles around each vertex (counting sort, in face order).
+struct Incidence {
+    std::vector<std::uint32_t> offsets, faces;
+};
+Incidence incidence(const TriMesh& mesh)
+{
+    Incidence inc;
+    const std::size_t nv = mesh.numVertices();
+    inc.offsets.assign(nv + 1, 0);
+    for (const Triangle& t : mesh.triangles)
+        for (std::uint32_t v : t) ++inc.offsets[v + 1];
+    for (std::size_t v = 0; v < nv; ++v) inc.offsets[v + 1] += inc.offsets[v];
+    inc.faces.resize(3 * mesh.numTriangles());
+    std::vector<std::uint32_t> fill(inc.offsets.begin(), inc.offsets.end() - 1);
+    for (std::size_t f = 0; f < mesh.numTriangles(); ++f)
+        for (std::uint32_t v : mesh.triangles[f]) inc.faces[fill[v]++] = std::uint32_t(f);
+    return inc;
+}
+
+/// Splits every vertex whose faces form more than one fan (faces joined through edges at
+/// the vertex): the fan of its first face keeps the vertex, each other fan gets a copy
+/// appended to the points. Returns the number of vertices split.
+std::size_t splitNonManifoldVertices(TriMesh& mesh)
+{
+    const Incidence inc = incidence(mesh);
+    const std::size_t nv = mesh.numVertices();
+    // Per vertex, the fan (0 = first) of each incident face, where there is more than one.
+    struct Split {
+        std::uint32_t vertex;
+        std::vector<std::uint32_t> faces, fans;
+        std::uint32_t numFans;
+    };
+    std::vector<std::vector<Split>> blocks(numBlocks(nv));
+    forEachBlock(nv, [&](std::size_t b, std::size_t begin, std::size_t end) {
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> others;  // (other vertex, local face)
+        std::vector<std::uint32_t> parent;
+        for (std::size_t v = begin; v < end; ++v) {
+            const std::uint32_t first = inc.offsets[v], count = inc.offsets[v + 1] - first;
+            if (count < 2) continue;
+            others.clear();
+            for (std::uint32_t k = 0; k < count; ++k)
+                for (std::uint32_t w : mesh.triangles[inc.faces[first + k]])
+                    if (w != v) others.emplace_back(w, k);
+            std::sort(others.begin(), others.end());
+            parent.resize(count);
+            std::iota(parent.begin(), parent.end(), 0u);
+            for (std::size_t i = 1; i < others.size(); ++i)
+                if (others[i].first == others[i - 1].first) {
+                    const std::uint32_t a = findRoot(parent, others[i].second),
+                                        c = findRoot(parent, others[i - 1].second);
+                    if (a != c) parent[std::max(a, c)] = std::min(a, c);
+                }
+            std::uint32_t numFans = 0;
+            std::vector<std::uint32_t> fanOfRoot(count, kNone), fans(count);
+            for (std::uint32_t k = 0; k < count; ++k) {
+                const std::uint32_t r = findRoot(parent, k);
+                if (fanOfRoot[r] == kNone) fanOfRoot[r] = numFans++;
+                fans[k] = fanOfRoot[r];
+            }
+            if (numFans < 2) continue;
+            Split s{std::uint32_t(v), {}, std::move(fans), numFans};
+            s.faces.assign(inc.faces.begin() + first, inc.faces.begin() + first + count);
+            blocks[b].push_back(std::move(s));
+        }
+    });
+    std::size_t numSplit = 0;
+    for (const auto& block : blocks)
+        for (const Split& s : block) {
+            const std::uint32_t base = std::uint32_t(mesh.points.size());
+            for (std::uint32_t c = 1; c < s.numFans; ++c) mesh.points.push_back(mesh.points[s.vertex]);
+            for (std::size_t k = 0; k < s.faces.size(); ++k)
+                if (s.fans[k] > 0)
+                    for (std::uint32_t& w : mesh.triangles[s.faces[k]])
+                        if (w == s.vertex) w = base + s.fans[k] - 1;
+            ++numSplit;
+        }
+    return numSplit;
+}
+
+/// Re-orients each edge-connected part coherently, keeping the orientation of the majority
+/// of its faces (so one flipped face is turned, not the rest). Returns the faces turned.
+std::size_t orientCoherently(TriMesh& mesh)
+{
+    const std::size_t nf = mesh.numTriangles();
+    // Half-edges keyed by their undirected edge; the direction bit says whether the face
+    // runs from the smaller vertex to the larger.
+    struct HalfEdge {
+        std::uint64_t key;
+        std::uint32_t face;
+        bool forward;
+        bool operator<(const HalfEdge& o) const { return key < o.key || (key == o.key && face < o.face); }
+    };
+    std::vector<HalfEdge> halfEdges(3 * nf);
+    forEachBlock(nf, [&](std::size_t, std::size_t begin, std::size_t end) {
+        for (std::size_t f = begin; f < end; ++f)
+            for (int k = 0; k < 3; ++k) {
+                const std::uint32_t a = mesh.triangles[f][std::size_t(k)], b = mesh.triangles[f][std::size_t((k + 1) % 3)];
+                halfEdges[3 * f + std::size_t(k)] = {std::uint64_t(std::min(a, b)) << 32 | std::max(a, b),
+                                                     std::uint32_t(f), a < b};
+            }
+    });
+    tbb::parallel_sort(halfEdges.begin(), halfEdges.end());
+    // Neighbours across manifold edges, and whether they disagree.
+    std::vector<std::array<std::uint32_t, 3>> neighbour(nf, {kNone, kNone, kNone});
+    std::vector<std::array<bool, 3>> disagrees(nf, {false, false, false});
+    std::vector<std::uint8_t> slots(nf, 0);
+    for (std::size_t i = 0; i + 1 < halfEdges.size(); ++i) {
+        const HalfEdge &a = halfEdges[i], &b = halfEdges[i + 1];
+        if (a.key != b.key || (i + 2 < halfEdges.size() && halfEdges[i + 2].key == a.key)) continue;
+        if (i > 0 && halfEdges[i - 1].key == a.key) continue;
+        if (slots[a.face] < 3 && slots[b.face] < 3) {
+            neighbour[a.face][slots[a.face]] = b.face, disagrees[a.face][slots[a.face]++] = a.forward == b.forward;
+            neighbour[b.face][slots[b.face]] = a.face, disagrees[b.face][slots[b.face]++] = a.forward == b.forward;
+        }
+    }
+    // Breadth-first over each part: flip[f] relative to the part's first face.
+    std::vector<std::int8_t> flip(nf, -1);
+    std::vector<std::uint32_t> queue, part;
+    std::size_t turned = 0;
+    for (std::size_t seed = 0; seed < nf; ++seed) {
+        if (flip[seed] >= 0) continue;
+        part.clear();
+        queue.assign(1, std::uint32_t(seed));
+        flip[seed] = 0;
+        std::size_t flipped = 0;
+        for (std::size_t q = 0; q < queue.size(); ++q) {
+            const std::uint32_t f = queue[q];
+            part.push_back(f);
+            flipped += std::size_t(flip[f]);
+            for (int k = 0; k < slots[f]; ++k) {
+                const std::uint32_t g = neighbour[f][std::size_t(k)];
+                if (flip[g] >= 0) continue;  // a non-orientable part keeps its first choice
+                flip[g] = std::int8_t(flip[f] ^ std::int8_t(disagrees[f][std::size_t(k)]));
+                queue.push_back(g);
+            }
+        }
+        const std::int8_t turn = 2 * flipped > part.size() ? 0 : 1;  // the side to turn: the minority
+        for (std::uint32_t f : part)
+            if (flip[f] == turn) {
+                std::swap(mesh.triangles[f][1], mesh.triangles[f][2]);
+                ++turned;
+            }
+    }
+    return turned;
+}
+
+/// Turns closed parts (vertex-connected, no border edge) whose signed volume is negative
+/// inside out, so that every closed part faces outward. Returns the parts turned.
+std::size_t turnClosedPartsOutward(TriMesh& mesh, const MeshCheckResult& check, std::size_t& facesTurned)
+{
+    const std::size_t nv = mesh.numVertices();
+    std::vector<std::uint32_t> parent(nv);
+    std::iota(parent.begin(), parent.end(), 0u);
+    for (const Triangle& t : mesh.triangles)
+        for (int k = 1; k < 3; ++k) {
+            const std::uint32_t a = findRoot(parent, t[0]), b = findRoot(parent, t[std::size_t(k)]);
+            if (a != b) parent[std::max(a, b)] = std::min(a, b);
+        }
+    std::vector<std::uint32_t> root(nv);
+    for (std::size_t v = 0; v < nv; ++v) root[v] = findRoot(parent, std::uint32_t(v));
+    std::unordered_set<std::uint32_t> open;
+    for (const auto& e : check.borderEdges) open.insert(root[e[0]]);
+    // Signed volume relative to each part's first vertex (small numbers far from the origin).
+    std::unordered_map<std::uint32_t, double> volume;
+    for (const Triangle& t : mesh.triangles) {
+        const std::uint32_t r = root[t[0]];
+        if (open.count(r)) continue;
+        const Vec3& o = mesh.points[r];
+        const Vec3 a = mesh.points[t[0]] - o, b = mesh.points[t[1]] - o, c = mesh.points[t[2]] - o;
+        volume[r] += dot(a, cross(b, c));
+    }
+    std::size_t turned = 0;
+    facesTurned = 0;
+    for (const auto& [r, v] : volume)
+        if (v < 0) ++turned;
+    if (turned == 0) return 0;
+    for (Triangle& t : mesh.triangles) {
+        const auto it = volume.find(root[t[0]]);
+        if (it != volume.end() && it->second < 0) {
+            std::swap(t[1], t[2]);
+            ++facesTurned;
+        }
+    }
+    return turned;
+}
+
+/// filledShare of PrepareMeshResult: the fill triangles cut into pieces much smaller than
+/// R, each piece's area at its centroid, summed over the ball of radius R of each vertex.
+std::vector<float> filledShareOf(const TriMesh& mesh, std::size_t firstFill, double radius)
+{
+    struct Piece {
+        Vec3 at;
+        double area;
+    };
+    std::vector<Piece> pieces;
+    const double pieceSize = radius / 16.0;
+    for (std::size_t f = firstFill; f < mesh.numTriangles(); ++f) {
+        const Triangle& t = mesh.triangles[f];
+        const Vec3 &a = mesh.points[t[0]], &b = mesh.points[t[1]], &c = mesh.points[t[2]];
+        const double longest = std::max({norm(b - a), norm(c - b), norm(a - c)});
+        const int m = std::clamp(int(std::ceil(longest / pieceSize)), 1, 64);
+        const double area = 0.5 * norm(cross(b - a, c - a)) / double(m * m);
+        // The m² sub-triangles of the regular subdivision, by their centroids.
+        const Vec3 u = (b - a) / double(m), w = (c - a) / double(m);
+        for (int i = 0; i < m; ++i)
+            for (int j = 0; i + j < m; ++j) {
+                pieces.push_back({a + u * (i + 1.0 / 3) + w * (j + 1.0 / 3), area});
+                if (i + j + 1 < m) pieces.push_back({a + u * (i + 2.0 / 3) + w * (j + 2.0 / 3), area});
+            }
+    }
+    const auto cellOf = [&](const Vec3& p) {
+        return std::array<std::int64_t, 3>{std::int64_t(std::floor(p.x / radius)), std::int64_t(std::floor(p.y / radius)),
+                                           std::int64_t(std::floor(p.z / radius))};
+    };
+    const auto keyOf = [](const std::array<std::int64_t, 3>& c) {
+        return std::uint64_t(c[0] & 0x1FFFFF) << 42 | std::uint64_t(c[1] & 0x1FFFFF) << 21 | std::uint64_t(c[2] & 0x1FFFFF);
+    };
+    std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells;
+    for (std::size_t i = 0; i < pieces.size(); ++i) cells[keyOf(cellOf(pieces[i].at))].push_back(std::uint32_t(i));
+    const double r2 = radius * radius, disc = M_PI * radius * radius;
+    std::vector<float> share(mesh.numVertices(), 0.0f);
+    forEachBlock(mesh.numVertices(), [&](std::size_t, std::size_t begin, std::size_t end) {
+        for (std::size_t v = begin; v < end; ++v) {
+            const Vec3& p = mesh.points[v];
+            const auto c = cellOf(p);
+            double sum = 0;
+            for (int dx = -1; dx <= 1; ++dx)
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dz = -1; dz <= 1; ++dz) {
+                        const auto it = cells.find(keyOf({c[0] + dx, c[1] + dy, c[2] + dz}));
+                        if (it == cells.end()) continue;
+                        for (std::uint32_t i : it->second)
+                            if (squaredNorm(pieces[i].at - p) <= r2) sum += pieces[i].area;
+                    }
+            share[v] = float(std::min(1.0, sum / disc));
+        }
+    });
+    return share;
+}
+
+} // namespace
+
+double defaultMaxHolePerimeter(double radius) { return M_PI * radius; }
+
+PrepareMeshResult prepareMesh(const TriMesh& input, const PrepareMeshOptions& options)
+{
+    if (input.points.empty()) throw InvalidInputError("the mesh has no vertices");
+    if (input.triangles.empty()) throw InvalidInputError("the mesh has no faces");
+    const std::size_t n = input.numVertices();
+    if (n >= std::size_t(kNone)) throw InvalidInputError("the mesh has more than 2^32 - 1 vertices");
+
+    // 1. What cannot be repaired.
+    {
+        std::size_t nonFinite = 0;
+        for (const Vec3& p : input.points) nonFinite += !isFinite(p);
+        if (nonFinite > 0)
+            throw InvalidInputError("the mesh has " + plural(nonFinite, "vertex", "vertices") +
+                                    " with NaN or infinite coordinates");
+        for (std::size_t f = 0; f < input.numTriangles(); ++f)
+            for (std::uint32_t v : input.triangles[f])
+                if (v >= n)
+                    throw InvalidInputError("face " + std::to_string(f) + " refers to vertex " + std::to_string(v) +
+                                            " but the mesh has only " + plural(n, "vertex", "vertices"));
+    }
+
+    PrepareMeshResult result;
+    // A repair made, or with repair off the reason to refuse the mesh.
+    const auto change = [&](const char* kind, std::size_t count, const std::string& problem, const std::string& done) {
+        if (!options.repair) throw InvalidInputError("the mesh has " + problem + ", and repair is off");
+        result.changes.push_back({kind, count, done});
+    };
+
+    // 2. Vertices at the same position become one.
+    TriMesh work;
+    work.points = input.points;
+    work.triangles = input.triangles;
+    std::size_t numMerged = 0;
+    std::vector<std::uint32_t> rep = samePositionRepresentatives(input.points, numMerged);
+    if (numMerged > 0) {
+        for (Triangle& t : work.triangles)
+            for (std::uint32_t& v : t) v = rep[v];
+        change("duplicate_vertices_merged", numMerged,
+               plural(numMerged, "vertex", "vertices") + " at exactly the position of another",
+               "merged " + plural(numMerged, "vertex", "vertices") +
+                   " with another at exactly the same position (texture seams, triangle soups)");
+    }
+
+    // 3. and 4. Faces that make no surface.
+    MeshCheckResult check = checkMesh(work);
+    if (check.numDegenerateFaces > 0 || check.numDuplicateFaces > 0) {
+        const std::size_t degenerate = check.numDegenerateFaces, duplicate = check.numDuplicateFaces;
+        if (degenerate > 0)
+            change("degenerate_faces_removed", degenerate,
+                   plural(degenerate, "degenerate face", "degenerate faces") + " (a repeated vertex, or no area)",
+                   "removed " + plural(degenerate, "degenerate face", "degenerate faces") +
+                       " (a repeated vertex, or no area)");
+        if (duplicate > 0)
+            change("duplicate_faces_removed", duplicate,
+                   plural(duplicate, "duplicate face", "duplicate faces") + " (the same vertices as an earlier face)",
+                   "removed " + plural(duplicate, "duplicate face", "duplicate faces") +
+                       " (the same vertices as an earlier face)");
+        removeBadFaces(work, check);
+        if (work.triangles.empty()) throw InvalidInputError("the mesh has no faces with an area");
+        check = checkMesh(work);
+    }
+    if (check.numNonManifoldEdges > 0) {
+        const std::size_t edges = check.numNonManifoldEdges;
+        const std::size_t removed = removeNonManifoldFaces(work);
+        change("non_manifold_faces_removed", removed,
+               plural(edges, "non-manifold edge", "non-manifold edges") + " (edges of more than two faces)",
+               "removed the " + plural(removed, "face", "faces") + " around " +
+                   plural(edges, "non-manifold edge", "non-manifold edges") +
+                   " (edges of more than two faces); the hole they leave is treated as any other");
+        if (work.triangles.empty()) throw InvalidInputError("the mesh has no faces left around its non-manifold edges");
+    }
+
+    // Only vertices in some face take part, in input order.
+    {
+        std::vector<std::uint32_t> index(n, kNone);
+        for (const Triangle& t : work.triangles)
+            for (std::uint32_t v : t) index[v] = 0;
+        std::uint32_t next = 0;
+        for (std::size_t v = 0; v < n; ++v)
+            if (index[v] == 0) {
+                index[v] = next++;
+                result.mesh.points.push_back(input.points[v]);
+            }
+        result.mesh.triangles.resize(work.triangles.size());
+        for (std::size_t f = 0; f < work.triangles.size(); ++f)
+            for (int k = 0; k < 3; ++k) result.mesh.triangles[f][std::size_t(k)] = index[work.triangles[f][std::size_t(k)]];
+        result.preparedOf.resize(n);
+        for (std::size_t v = 0; v < n; ++v) result.preparedOf[v] = index[rep[v]];
+        result.numIsolatedVertices = std::size_t(std::count(result.preparedOf.begin(), result.preparedOf.end(), kNone));
+    }
+    work = TriMesh();
+    TriMesh& mesh = result.mesh;
+
+    // 5. One copy of a vertex per fan of faces.
+    if (const std::size_t split = splitNonManifoldVertices(mesh); split > 0)
+        change("non_manifold_vertices_split", split,
+               plural(split, "non-manifold vertex", "non-manifold vertices") + " (separate fans of faces meeting at one point)",
+               "split " + plural(split, "non-manifold vertex", "non-manifold vertices") +
+                   " (where separate fans of faces meet at one point) into one per fan");
+
+    // 6. Orientation. The check of the faces stands for the prepared mesh if nothing
+    // changed it (a clean scan: one check in all).
+    if (!result.changes.empty() || result.numIsolatedVertices > 0) check = checkMesh(mesh);
+    if (check.numInconsistentEdges > 0) {
+        const std::size_t turned = orientCoherently(mesh);
+        change("faces_reoriented", turned,
+               plural(check.numInconsistentEdges, "edge", "edges") + " whose two faces disagree in orientation",
+               "re-oriented " + plural(turned, "face", "faces") + " to agree with their neighbours");
+        check = checkMesh(mesh);
+    }
+    {
+        std::size_t facesTurned = 0;
+        if (const std::size_t parts = turnClosedPartsOutward(mesh, check, facesTurned); parts > 0) {
+            change("closed_parts_turned_outward", parts,
+                   plural(parts, "closed part", "closed parts") + " facing inward (negative volume)",
+                   "turned " + plural(parts, "closed part", "closed parts") + " (" +
+                       plural(facesTurned, "face", "faces") + ") that faced inward, so that they face outward");
+            check = checkMesh(mesh);
+        }
+    }
+
+    // 7. Holes, for the computation only.
+    result.firstFillTriangle = mesh.numTriangles();
+    if (options.maxHolePerimeter > 0 && !check.closed) {
+        FillHolesOptions fo;
+        fo.maxPerimeter = options.maxHolePerimeter;
+        result.holes = fillHoles(mesh, check.borderEdges, fo);
+        if (result.holes.numFilled > 0) {
+            std::ostringstream msg;
+            msg.precision(3);
+            msg << "filled " << plural(result.holes.numFilled, "hole", "holes") << " for the computation (the longest "
+                << result.holes.largestPerimeter << " around, " << result.holes.areaAdded
+                << " of area added); values near them rest partly on the filled surface (filled_share)";
+            result.changes.push_back({"holes_filled", result.holes.numFilled, msg.str()});
+            check = checkMesh(mesh);
+        }
+        if (result.holes.numFailed > 0)
+            result.changes.push_back({"holes_not_filled", result.holes.numFailed,
+                                      "could not fill " + plural(result.holes.numFailed, "hole", "holes") +
+                                          "; values near them stay masked"});
+    }
+    if (result.holes.numFilled > 0 && options.radius > 0)
+        result.filledShare = filledShareOf(mesh, result.firstFillTriangle, options.radius);
+    if (result.numIsolatedVertices > 0)
+        result.changes.push_back({"isolated_vertices", result.numIsolatedVertices,
+                                  plural(result.numIsolatedVertices, "vertex belongs", "vertices belong") +
+                                      " to no face and get no values (NaN)"});
+    result.check = std::move(check);
+    return result;
+}
+
+std::vector<float> toInputVertices(const PrepareMeshResult& prepared, const std::vector<float>& column)
+{
+    std::vector<float> out(prepared.preparedOf.size(), std::numeric_limits<float>::quiet_NaN());
+    for (std::size_t v = 0; v < out.size(); ++v)
+        if (prepared.preparedOf[v] != kNone && prepared.preparedOf[v] < column.size())
+            out[v] = column[prepared.preparedOf[v]];
+    return out;
+}
+
+InputVertexLists inputVerticesOf(const PrepareMeshResult& prepared)
+{
+    InputVertexLists lists;
+    lists.offsets.assign(prepared.mesh.numVertices() + 1, 0);
+    for (std::uint32_t p : prepared.preparedOf)
+        if (p != kNone) ++lists.offsets[p + 1];
+    for (std::size_t p = 0; p + 1 < lists.offsets.size(); ++p) lists.offsets[p + 1] += lists.offsets[p];
+    lists.inputs.resize(lists.offsets.back());
+    std::vector<std::size_t> fill(lists.offsets.begin(), lists.offsets.end() - 1);
+    for (std::size_t v = 0; v < prepared.preparedOf.size(); ++v)
+        if (prepared.preparedOf[v] != kNone) lists.inputs[fill[prepared.preparedOf[v]]++] = std::uint32_t(v);
+    return lists;
+}
+
+} // namespace msii
