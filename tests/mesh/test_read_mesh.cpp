@@ -574,3 +574,27 @@ TEST(ReadMesh, PlyHeaderErrors)
         EXPECT_THROW(readMesh(path), InvalidInputError) << header;
     }
 }
+
+// Real OFF files: a comment right after the keyword, comments at line ends, blank lines,
+// colours after the indices, polygons; and OBJ files with v/vt/vn, negative indices,
+// polygons, groups and objects.
+TEST(ReadMesh, OffAndObjAsRealFilesHaveThem)
+{
+    TempDir dir;
+    writeFile(dir.file("commented.off"), "OFF\n# made by a scanner\n\n4 2 0\n0 0 0\n1 0 0 # corner\n1 1 0\n\n0 1 0\n"
+                                         "4 0 1 2 3 255 0 0\n3 0 2 1 0.5 0.5 0.5\n");
+    const ReadMeshResult off = readMesh(dir.file("commented.off"));
+    EXPECT_EQ(off.mesh.points.size(), 4u);
+    EXPECT_EQ(off.mesh.triangles, (std::vector<Triangle>{{0, 1, 2}, {0, 2, 3}, {0, 2, 1}}));
+    EXPECT_EQ(off.numPolygonsRead, 2u);
+    EXPECT_EQ(off.mesh.points[1], Vec3(1, 0, 0));
+    writeFile(dir.file("counts-on-keyword-line.off"), "COFF 3 1 0\n0 0 0 1 1 1 1\n1 0 0 1 1 1 1\n0 1 0 1 1 1 1\n3 0 1 2\n");
+    EXPECT_EQ(readMesh(dir.file("counts-on-keyword-line.off")).mesh.triangles, (std::vector<Triangle>{{0, 1, 2}}));
+
+    writeFile(dir.file("textured.obj"), "# exported\nmtllib t.mtl\no tablet\ng front\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                        "vt 0 0\nvt 1 0\nvn 0 0 1\nusemtl clay\ns 1\nf 1/1/1 2/2/1 3/2/1 4/1/1\n"
+                                        "g back\nf -4//1 -2//1 -1//1\n");
+    const ReadMeshResult obj = readMesh(dir.file("textured.obj"));
+    EXPECT_EQ(obj.mesh.points.size(), 4u);
+    EXPECT_EQ(obj.mesh.triangles, (std::vector<Triangle>{{0, 1, 2}, {0, 2, 3}, {0, 2, 3}}));
+}

@@ -116,7 +116,7 @@ TEST(MsiiCli, ComputeWritesFeaturesAndSidecar)
     for (const auto& p : res.vertexProperties) names.push_back(p.name);
     const std::vector<std::string> expected{"V_01", "V_02", "V_03", "V_04", "S_01", "S_02",
                                             "S_03", "S_04", "P_01", "P_02", "P_03", "P_04",
-                                            "L_01", "L_02", "L_03", "L_04", "quality"};
+                                            "L_01", "L_02", "L_03", "L_04", "quality", "filled_share"};
     ASSERT_EQ(names, expected);
     // Middle of a gently curved tablet: values near one half; near the border: NaN.
     std::size_t finite = 0, masked = 0;
@@ -141,16 +141,22 @@ TEST(MsiiCli, BadInputFailsCleanly)
     expectCleanFailure("'" + writeText("verts.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n") + "' -r 1", "faces");
     expectCleanFailure("'" + writeText("nan.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\nnan 1 0\n3 0 1 2\n") + "' -r 1", "NaN");
     expectCleanFailure("'" + writeText("inf.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 inf 0\n3 0 1 2\n") + "' -r 1", "infinite");
+    // Repairable meshes are refused only with --strict (by default they are repaired).
     expectCleanFailure("'" + writeText("degenerate.obj",
-                                       "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\n") + "' -r 1",
+                                       "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\n") + "' -r 1 --strict",
                        "degenerate");
     expectCleanFailure("'" + writeText("duplicate.obj",
-                                       "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 3\n") + "' -r 1",
+                                       "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 3\n") + "' -r 1 --strict",
                        "duplicate");
     expectCleanFailure("'" + writeText("nonmanifold.obj",
                                        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\n"
-                                       "f 1 2 3\nf 2 1 4\nf 1 2 5\n") + "' -r 1",
+                                       "f 1 2 3\nf 2 1 4\nf 1 2 5\n") + "' -r 1 --strict",
                        "non-manifold");
+    // Nothing left after repair: refused all the same.
+    expectCleanFailure("'" + writeText("only-degenerate.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n") + "' -r 1",
+                       "no faces with an area");
+    expectCleanFailure("'" + writeText("truncated.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n") + "' -r 1",
+                       "unexpected end of file");
     expectCleanFailure(patch, "--radius is required");
     expectCleanFailure(patch + " -r 0", "radius");
     expectCleanFailure(patch + " -r -2", "radius");
@@ -195,7 +201,7 @@ TEST(MsiiCli, ExactModeSelectionAndGigaMeshFiles)
     const ReadMeshResult f = readMesh(fast.string(), ro), e = readMesh(exact.string(), ro);
     std::vector<std::string> names;
     for (const auto& p : e.vertexProperties) names.push_back(p.name);
-    ASSERT_EQ(names, (std::vector<std::string>{"V_01", "V_02", "V_03", "V_04", "P_01", "P_02", "P_03", "P_04", "quality"}));
+    ASSERT_EQ(names, (std::vector<std::string>{"V_01", "V_02", "V_03", "V_04", "P_01", "P_02", "P_03", "P_04", "quality", "filled_share"}));
     std::size_t computed = 0, compared = 0;
     for (std::size_t i = 0; i < e.mesh.numVertices(); ++i) {
         if (std::isnan(e.vertexProperties[0].values[i])) continue;
@@ -434,7 +440,14 @@ TEST(MsiiCli, ComputeCollectionSkipsResumesAndReports)
 TEST(MsiiCli, RepairsByDefaultAndStrictRefuses)
 {
     TriMesh mesh = readMesh(smallPatch()).mesh;
-    const Triangle t = mesh.triangles[mesh.numTriangles() / 2];
+    // The fin on the triangle nearest the middle of the 4 x 4 mm patch, away from its border.
+    Triangle t = mesh.triangles.front();
+    double nearest = 1e9;
+    for (const Triangle& c : mesh.triangles) {
+        const Vec3 m = (mesh.points[c[0]] + mesh.points[c[1]] + mesh.points[c[2]]) / 3.0;
+        const double d = std::hypot(m.x - 2.0, m.y - 2.0);
+        if (d < nearest) nearest = d, t = c;
+    }
     mesh.points.push_back((mesh.points[t[0]] + mesh.points[t[1]]) * 0.5 + Vec3(0, 0, 0.3));
     mesh.triangles.push_back({t[0], t[1], std::uint32_t(mesh.numVertices() - 1)});
     const std::string fin = (tempDir() / "fin.ply").string();

@@ -474,7 +474,7 @@ PrepareMeshResult prepareMesh(const TriMesh& input, const PrepareMeshOptions& op
     if (result.numIsolatedVertices > 0)
         result.changes.push_back({"isolated_vertices", result.numIsolatedVertices,
                                   plural(result.numIsolatedVertices, "vertex belongs", "vertices belong") +
-                                      " to no face and get no values (NaN)"});
+                                      " to no face: no values there (NaN)"});
     result.check = std::move(check);
     return result;
 }

@@ -18,6 +18,7 @@
 #include <iostream>
 #include <mutex>
 #include <streambuf>
+#include <string_view>
 #include <vector>
 
 #include <fcntl.h>
@@ -271,6 +272,132 @@ ReadMeshResult readWithOpenMesh(const std::string& path, const std::string& form
     return result;
 }
 
+/// The next line of @p text from @p pos without its comment (from '#') and surrounding
+/// blanks; false at the end of the text.
+bool nextLine(const std::string& text, std::size_t& pos, std::string_view& line)
+{
+    if (pos >= text.size()) return false;
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    line = std::string_view(text).substr(pos, end - pos);
+    pos = end + 1;
+    if (const std::size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
+    while (!line.empty() && std::isspace(static_cast<unsigned char>(line.front()))) line.remove_prefix(1);
+    while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back()))) line.remove_suffix(1);
+    return true;
+}
+
+/// Splits @p line into numbers (as many as parse); false if a word is not a number.
+template <class T>
+bool numbersOf(std::string_view line, std::vector<T>& out)
+{
+    out.clear();
+    const char* p = line.data();
+    const char* end = line.data() + line.size();
+    while (p < end) {
+        while (p < end && std::isspace(static_cast<unsigned char>(*p))) ++p;
+        if (p == end) break;
+        T value{};
+        if (*p == '+') ++p;
+        const auto r = std::from_chars(p, end, value);
+        if (r.ec != std::errc() || (r.ptr < end && !std::isspace(static_cast<unsigned char>(*r.ptr)))) return false;
+        out.push_back(value);
+        p = r.ptr;
+    }
+    return true;
+}
+
+/// ASCII OFF as real files have it: comments anywhere (also right after the keyword, which
+/// OpenMesh's reader takes for the end of the file), blank lines, the counts on the keyword's
+/// line or the next, colours or normals after a vertex's coordinates or a face's indices
+/// (COFF, NOFF, CNOFF, STOFF), homogeneous 4OFF; polygons fan-triangulated. Line by line,
+/// so a file that ends early is noticed.
+ReadMeshResult readOffAscii(const std::string& path, const std::string& text)
+{
+    std::size_t pos = 0;
+    std::string_view line;
+    const auto unexpectedEnd = [&](std::size_t nv, std::size_t nf, const std::string& what) {
+        return InvalidInputError("unexpected end of file in '" + path + "' (it declares " + std::to_string(nv) +
+                                 (nv == 1 ? " vertex and " : " vertices and ") + std::to_string(nf) +
+                                 (nf == 1 ? " face" : " faces") + " but " + what + ").");
+    };
+    // The keyword, possibly with the counts after it.
+    while (nextLine(text, pos, line) && line.empty()) {
+    }
+    std::string_view keyword = line.substr(0, line.find_first_of(" \t\r"));
+    const bool homogeneous = keyword.find('4') != std::string_view::npos;
+    if (keyword.size() < 3 || keyword.substr(keyword.size() - 3) != "OFF" || keyword.find('n') != std::string_view::npos)
+        throw InvalidInputError("'" + path + "' could not be read as off (it does not start with OFF).");
+    std::string_view rest = line.substr(keyword.size());
+    std::vector<double> numbers;
+    std::vector<long long> counts;
+    while (true) {
+        while (!rest.empty() && std::isspace(static_cast<unsigned char>(rest.front()))) rest.remove_prefix(1);
+        if (!rest.empty()) break;
+        if (!nextLine(text, pos, line)) throw InvalidInputError("'" + path + "' has no counts after OFF.");
+        rest = line;
+    }
+    if (!numbersOf(rest, counts) || counts.size() < 2 || counts[0] < 0 || counts[1] < 0)
+        throw InvalidInputError("'" + path + "' could not be read as off (the counts line is '" + std::string(rest) + "').");
+    const std::size_t nv = std::size_t(counts[0]), nf = std::size_t(counts[1]);
+    if (nv == 0) throw InvalidInputError("'" + path + "' contains no vertices.");
+    if (nf == 0) throw InvalidInputError("'" + path + "' contains no faces.");
+    if (nv > text.size() / 6 || nf > text.size() / 8)
+        throw unexpectedEnd(nv, nf, "is only " + std::to_string(text.size()) + " bytes long");
+
+    ReadMeshResult result;
+    result.format = "off";
+    auto& points = result.mesh.points;
+    points.reserve(nv);
+    while (points.size() < nv) {
+        if (!nextLine(text, pos, line)) throw unexpectedEnd(nv, nf, "holds only " + std::to_string(points.size()) + " vertices");
+        if (line.empty()) continue;
+        if (!numbersOf(line, numbers) || numbers.size() < (homogeneous ? 4u : 3u))
+            throw InvalidInputError("'" + path + "': vertex " + std::to_string(points.size()) + " is not 3 numbers ('" +
+                                    std::string(line) + "').");
+        const double w = homogeneous ? numbers[3] : 1.0;
+        points.push_back({numbers[0] / w, numbers[1] / w, numbers[2] / w});
+    }
+    std::vector<long long> indices;
+    auto& triangles = result.mesh.triangles;
+    triangles.reserve(nf);
+    while (result.numPolygonsRead < nf) {
+        if (!nextLine(text, pos, line))
+            throw unexpectedEnd(nv, nf, "holds only " + std::to_string(result.numPolygonsRead) + " faces");
+        if (line.empty()) continue;
+        const std::size_t face = result.numPolygonsRead;
+        // Colour values after the indices may be floats: read the indices as integers first.
+        std::string_view head = line;
+        if (!numbersOf(head.substr(0, head.find_first_of(" \t")), indices) || indices.size() != 1 || indices[0] < 1)
+            throw InvalidInputError("'" + path + "': face " + std::to_string(face + 1) + " does not start with its vertex count ('" +
+                                    std::string(line) + "').");
+        const std::size_t n = std::size_t(indices[0]);
+        std::vector<double> all;
+        if (!numbersOf(line, all) || all.size() < n + 1)
+            throw unexpectedEnd(nv, nf, "face " + std::to_string(face + 1) + " lists fewer than " + std::to_string(n) + " vertices");
+        std::vector<std::uint32_t> polygon(n);
+        for (std::size_t k = 0; k < n; ++k) {
+            const double v = all[k + 1];
+            if (!(v >= 0) || v >= double(nv) || v != std::floor(v))
+                throw InvalidInputError("'" + path + "' has a vertex index " + std::to_string(static_cast<long long>(v)) +
+                                        " in face " + std::to_string(face + 1) + " but only " + std::to_string(nv) +
+                                        " vertices.");
+            polygon[k] = std::uint32_t(v);
+        }
+        for (std::size_t k = 2; k < n; ++k) triangles.push_back({polygon[0], polygon[k - 1], polygon[k]});
+        ++result.numPolygonsRead;
+    }
+    if (triangles.empty()) throw InvalidInputError("'" + path + "' contains no faces.");
+    return result;
+}
+
+/// Whether an OFF file is binary ("OFF BINARY"): OpenMesh reads those.
+bool isBinaryOff(const std::string& text)
+{
+    const std::size_t end = std::min(text.size(), std::size_t(256));
+    return text.substr(0, end).find("BINARY") != std::string::npos;
+}
+
 } // namespace
 
 ReadMeshResult readMesh(const std::string& path, const ReadMeshOptions& options)
@@ -279,6 +406,19 @@ ReadMeshResult readMesh(const std::string& path, const ReadMeshOptions& options)
     std::transform(extension.begin(), extension.end(), extension.begin(),
                    [](unsigned char c) { return char(std::tolower(c)); });
     if (extension == ".ply") return readPly(path, options);
+    if (extension == ".off") {
+        checkReadable(path);
+        std::string text;
+        {
+            std::FILE* file = std::fopen(path.c_str(), "rb");
+            if (!file) throw IOError("cannot open '" + path + "': " + std::strerror(errno) + ".");
+            std::vector<char> buffer(1 << 20);
+            std::size_t got;
+            while ((got = std::fread(buffer.data(), 1, buffer.size(), file)) > 0) text.append(buffer.data(), got);
+            std::fclose(file);
+        }
+        if (!isBinaryOff(text)) return readOffAscii(path, text);
+    }
     if (extension == ".obj" || extension == ".off" || extension == ".stl")
         return readWithOpenMesh(path, extension.substr(1));
     const std::string found = extension.empty() ? "it has no file extension"
