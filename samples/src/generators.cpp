@@ -59,6 +59,7 @@ enum Stream : std::uint64_t {
     kStreamHills = 16,
     kStreamWedges,
     kStreamNoise,
+    kStreamHoles,
 };
 
 // ---------------------------------------------------------------------------------------
@@ -1019,6 +1020,44 @@ StreamedMeshCounts writeHeightFieldPly(const HeightFieldOptions& options, const 
     }
     file.commit();
     return {numPoints, numTriangles};
+}
+
+HoleReport punchHoles(TriMesh& mesh, const HoleOptions& options)
+{
+    if (!(options.minSize > 0) || !(options.maxSize >= options.minSize) || !std::isfinite(options.maxSize))
+        throw InvalidInputError("hole sizes must be positive with minSize <= maxSize");
+    HoleReport report;
+    if (options.count == 0 || mesh.empty()) return report;
+    // Centres: seeded vertices, each at least 2 maxSize + minSize from the others (holes
+    // stay apart), tried in a fixed order so the result depends on the seed alone.
+    const double apart = 2.0 * options.maxSize + options.minSize;
+    std::vector<std::uint32_t> centres;
+    std::vector<double> radii;
+    for (std::uint64_t k = 0; centres.size() < options.count && k < 64 * options.count + 1000; ++k) {
+        const std::uint32_t v = std::uint32_t(hashKey(options.seed, kStreamHoles, k) % mesh.numVertices());
+        const Vec3& p = mesh.points[v];
+        bool free = true;
+        for (std::uint32_t c : centres) free = free && norm(mesh.points[c] - p) > apart;
+        if (!free) continue;
+        centres.push_back(v);
+        radii.push_back(options.minSize + (options.maxSize - options.minSize) *
+                                              unitInterval(hashKey(options.seed, kStreamHoles, k, 1)));
+    }
+    // A face goes when one of its vertices lies within its hole's radius of the centre.
+    std::vector<char> gone(mesh.numVertices(), 0);
+    for (std::size_t h = 0; h < centres.size(); ++h) {
+        const Vec3& c = mesh.points[centres[h]];
+        for (std::size_t v = 0; v < mesh.numVertices(); ++v)
+            if (norm(mesh.points[v] - c) <= radii[h]) gone[v] = 1;
+        gone[centres[h]] = 1;
+    }
+    const std::size_t before = mesh.numTriangles();
+    mesh.triangles.erase(std::remove_if(mesh.triangles.begin(), mesh.triangles.end(),
+                                        [&](const Triangle& t) { return gone[t[0]] || gone[t[1]] || gone[t[2]]; }),
+                         mesh.triangles.end());
+    report.holes = centres.size();
+    report.facesRemoved = before - mesh.numTriangles();
+    return report;
 }
 
 } // namespace msii::samples

@@ -85,7 +85,8 @@ int main(int argc, char** argv)
 
     std::string shape, output, centerText;
     double spacing = 0, radius = 0, side = 0, width = 0, height = 0, thickness = 0, relief = 0, noise = 0;
-    double wedgeSize = 0, wedgeDensity = 0;
+    double wedgeSize = 0, wedgeDensity = 0, holeSize = 0;
+    std::size_t holes = 0;
     std::uint64_t seed = 1;
     bool closed = false, cavity = false, ascii = false, doublePoints = false, quiet = false, list = false;
 
@@ -117,6 +118,11 @@ int main(int argc, char** argv)
     auto* optNoise = app.add_option("--noise", noise, "terrain/tablet: smooth noise amplitude, mm (default 0.002)");
     auto* optWedgeSize = app.add_option("--wedge-size", wedgeSize, "tablet: mean wedge length, mm (default 1.5)");
     auto* optWedgeDensity = app.add_option("--wedge-density", wedgeDensity, "tablet: wedges per mm^2 (default 0.15)");
+    app.add_option("--holes", holes,
+                   "Scanner-like holes: remove the faces around this many seeded spots (vertices are kept)");
+    auto* optHoleSize = app.add_option("--hole-size", holeSize,
+                                       "With --holes: largest hole radius, mm (default 2 spacings; the smallest is a "
+                                       "quarter of it)");
     app.add_flag("--ascii", ascii, "Write ascii PLY (default binary little endian)");
     app.add_flag("--double", doublePoints, "Write coordinates as double (exact) instead of float");
     app.add_flag("-q,--quiet", quiet, "Do not print the summary line");
@@ -157,6 +163,7 @@ int main(int argc, char** argv)
             if (opt->count() > 0 && shapes.count(shape) == 0)
                 throw UsageError("option " + opt->get_name() + " does not apply to shape " + shape);
         if (optThickness->count() > 0 && !closed) throw UsageError("--thickness needs --closed");
+        if (optHoleSize->count() > 0 && holes == 0) throw UsageError("--hole-size needs --holes");
 
         msii::TriMesh mesh;
         std::ostringstream comment;
@@ -194,7 +201,7 @@ int main(int argc, char** argv)
             o.seed = seed;
             comment << " width " << o.width << " height " << o.height << " spacing " << o.spacing;
             if (o.closed) comment << " closed thickness " << o.thickness;
-            if (!o.closed && !ascii) {
+            if (!o.closed && !ascii && holes == 0) {
                 // Streamed: never held in memory, so any size the disk takes.
                 msii::WritePlyOptions plyOptions;
                 plyOptions.forceDoublePoints = doublePoints;
@@ -211,6 +218,19 @@ int main(int argc, char** argv)
             mesh = msii::samples::makeHeightField(o);
         }
 
+        if (holes > 0) {
+            msii::samples::HoleOptions ho;
+            ho.count = holes;
+            const double step = optSpacing->count()                       ? spacing
+                                : shape == "sphere" || shape == "cavity" ? msii::samples::SphereOptions{}.spacing
+                                : shape == "cube"                        ? msii::samples::CubeOptions{}.spacing
+                                                                         : msii::samples::HeightFieldOptions{}.spacing;
+            ho.maxSize = optHoleSize->count() ? holeSize : 2.0 * step;
+            ho.minSize = 0.25 * ho.maxSize;
+            ho.seed = seed;
+            const msii::samples::HoleReport made = msii::samples::punchHoles(mesh, ho);
+            comment << " holes " << made.holes << " up to " << ho.maxSize;
+        }
         msii::WritePlyOptions plyOptions;
         plyOptions.binary = !ascii;
         plyOptions.forceDoublePoints = doublePoints;

@@ -453,8 +453,8 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                         {"masked", args.exact ? "NaN where the ball reaches a mesh border, and at vertices not computed"
                                               : "NaN where the ball of that radius reaches a mesh border"}};
     const auto& st = result.stats;
-    j["mesh"] = {{"vertices", st.numVertices},
-                 {"faces", st.numTriangles},
+    j["mesh"] = {{"vertices", read.mesh.numVertices()},
+                 {"faces", inputFaces},
                  {"faces_in_file", inputFaces},
                  {"faces_removed", [&] {
                       std::size_t removed = 0;
@@ -509,9 +509,9 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
 
     if (!args.quiet)
         std::fprintf(stderr, "msii: %s -> %s (%zu vertices, %.1f s)\n", input.c_str(),
-                     output.c_str(), st.numVertices,
+                     output.c_str(), read.mesh.numVertices(),
                      total.seconds());
-    return {st.numVertices, result.voxelSize, total.seconds()};
+    return {read.mesh.numVertices(), result.voxelSize, total.seconds()};
 }
 
 /// Mesh files msii reads, by extension (case-insensitive).

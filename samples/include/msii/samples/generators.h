@@ -141,4 +141,21 @@ StreamedMeshCounts writeHeightFieldPly(const HeightFieldOptions& options, const 
 /// @throw InvalidInputError for the same invalid sizes as makeHeightField.
 double heightFieldValue(const HeightFieldOptions& options, double x, double y);
 
+/// Scanner-like holes: removes the faces around @p count seeded vertices, each hole reaching
+/// a seeded radius in [minSize, maxSize] from its centre vertex (at least the faces around the
+/// centre); holes stay at least 2 maxSize + minSize apart. Vertices are kept (those inside a
+/// hole then belong to no face), so indices stay valid.
+struct HoleOptions {
+    std::size_t count = 10;   ///< holes wanted (fewer if the surface has no room)
+    double minSize = 0.05;    ///< smallest hole radius, mm
+    double maxSize = 0.2;     ///< largest hole radius, mm
+    std::uint64_t seed = 1;
+};
+struct HoleReport {
+    std::size_t holes = 0, facesRemoved = 0;
+};
+/// @throw InvalidInputError for sizes that are not positive or minSize > maxSize.
+HoleReport punchHoles(TriMesh& mesh, const HoleOptions& options);
+
 } // namespace msii::samples
+
