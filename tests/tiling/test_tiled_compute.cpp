@@ -4,11 +4,14 @@
 // budget; a budget too small for even one tile is refused with the amount needed.
 #include <msii/core/errors.h>
 #include <msii/samples/generators.h>
+#include <msii/mesh/mesh_check.h>
+#include <msii/mesh/mesh_stats.h>
 #include <msii/tiling/tiled_compute.h>
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -19,11 +22,14 @@ using namespace msii;
 
 namespace {
 
-/// Largest |tiled − untiled| over all features; NaN must match NaN.
-double maxDifference(const ComputeResult& a, const ComputeResult& b, std::size_t& nanMismatches)
+/// Largest |tiled − untiled| over all features; NaN must match NaN. @p compared counts the
+/// pairs of numbers compared (NaN/NaN pairs are not), so that a check of nothing shows.
+double maxDifference(const ComputeResult& a, const ComputeResult& b, std::size_t& nanMismatches,
+                     std::size_t* compared = nullptr)
 {
     double worst = 0;
     nanMismatches = 0;
+    if (compared) *compared = 0;
     const std::vector<std::vector<float>>* as[4] = {&a.invariants.volume, &a.invariants.sphere, &a.patchLine.patch,
                                                     &a.patchLine.line};
     const std::vector<std::vector<float>>* bs[4] = {&b.invariants.volume, &b.invariants.sphere, &b.patchLine.patch,
@@ -34,7 +40,10 @@ double maxDifference(const ComputeResult& a, const ComputeResult& b, std::size_t
             for (std::size_t i = 0; i < (*as[q])[j].size(); ++i) {
                 const float x = (*as[q])[j][i], y = (*bs[q])[j][i];
                 if (std::isnan(x) != std::isnan(y)) ++nanMismatches;
-                else if (!std::isnan(x)) worst = std::max(worst, double(std::abs(x - y)));
+                else if (!std::isnan(x)) {
+                    worst = std::max(worst, double(std::abs(x - y)));
+                    if (compared) ++*compared;
+                }
             }
     }
     return worst;
@@ -45,7 +54,7 @@ struct TiledAgainstWhole {
     ComputeResult tiled;
     TiledComputeInfo info;
     double diff = 0;
-    std::size_t nanMismatches = 0;
+    std::size_t nanMismatches = 0, compared = 0;
 };
 
 TiledAgainstWhole tiledAgainstWhole(const TriMesh& mesh, const ComputeOptions& co, int n)
@@ -56,7 +65,7 @@ TiledAgainstWhole tiledAgainstWhole(const TriMesh& mesh, const ComputeOptions& c
     to.tilesPerAxis = n;
     TiledAgainstWhole t;
     t.tiled = computeTiled(copy, co, to, &t.info);
-    t.diff = maxDifference(untiled, t.tiled, t.nanMismatches);
+    t.diff = maxDifference(untiled, t.tiled, t.nanMismatches, &t.compared);
     return t;
 }
 
@@ -74,12 +83,101 @@ TriMesh tablet(double width = 18, double height = 12, double spacing = 0.12, std
 /// Prints how @p t compares (prefixed by @p what) and expects every value bit-identical.
 void expectBitIdentical(const TiledAgainstWhole& t, const std::string& what)
 {
-    std::printf("%s: max difference %.3g, NaN mismatches %zu\n", what.c_str(), t.diff, t.nanMismatches);
+    std::printf("%s: %zu values compared, max difference %.3g, NaN mismatches %zu\n", what.c_str(), t.compared, t.diff,
+                t.nanMismatches);
+    EXPECT_GT(t.compared, 0u) << what;
     EXPECT_EQ(t.diff, 0.0) << what;
     EXPECT_EQ(t.nanMismatches, 0u) << what;
 }
 
+/// A closed slab as scanners and meshers make them: the fine irregular tablet on top, and
+/// side walls and a bottom of a few long triangles (walls zipped from every top border
+/// vertex to bottom vertices @p bottomStep apart; the bottom a fan around its centre).
+TriMesh slabWithLongWalls(double width, double height, double spacing, double thickness, double bottomStep)
+{
+    samples::HeightFieldOptions ho;
+    ho.kind = samples::HeightFieldKind::Tablet;
+    ho.width = width;
+    ho.height = height;
+    ho.spacing = spacing;
+    ho.seed = 9;
+    TriMesh mesh = samples::makeHeightField(ho);
+    const std::uint32_t nx = std::uint32_t(std::lround(width / spacing)), ny = std::uint32_t(std::lround(height / spacing));
+    const auto top = [&](std::uint32_t i, std::uint32_t j) { return j * (nx + 1) + i; };
+    // The four sides counter-clockwise seen from above, as top border vertices and as the
+    // corners the bottom vertices run between.
+    std::vector<std::vector<std::uint32_t>> sides(4);
+    for (std::uint32_t i = 0; i <= nx; ++i) sides[0].push_back(top(i, 0));
+    for (std::uint32_t j = 0; j <= ny; ++j) sides[1].push_back(top(nx, j));
+    for (std::uint32_t i = nx + 1; i-- > 0;) sides[2].push_back(top(i, ny));
+    for (std::uint32_t j = ny + 1; j-- > 0;) sides[3].push_back(top(0, j));
+    // Bottom corners below the top's corners (each side ends where the next begins).
+    std::array<std::uint32_t, 4> corner{};
+    for (std::size_t k = 0; k < 4; ++k) {
+        const Vec3 p = mesh.points[sides[k].front()];
+        mesh.points.push_back({p.x, p.y, -thickness});
+        corner[k] = std::uint32_t(mesh.points.size() - 1);
+    }
+    std::vector<std::uint32_t> bottomRing;
+    for (std::size_t k = 0; k < 4; ++k) {
+        const std::vector<std::uint32_t>& side = sides[k];
+        const Vec3 a = mesh.points[side.front()], b = mesh.points[side.back()];
+        const int segments = std::max(1, int(std::lround(norm(b - a) / bottomStep)));
+        std::vector<std::uint32_t> bottom{corner[k]};
+        for (int q = 1; q < segments; ++q) {
+            const Vec3 p = a + (b - a) * (double(q) / segments);
+            mesh.points.push_back({p.x, p.y, -thickness});
+            bottom.push_back(std::uint32_t(mesh.points.size() - 1));
+        }
+        bottom.push_back(corner[(k + 1) % 4]);
+        bottomRing.insert(bottomRing.end(), bottom.begin(), bottom.end() - 1);
+        // Zip the fine top polyline to the coarse bottom one by their parameter along the side.
+        const auto param = [&](const Vec3& p) { return norm(Vec3(p.x - a.x, p.y - a.y, 0)) / norm(Vec3(b.x - a.x, b.y - a.y, 0)); };
+        std::size_t i = 0, j = 0;
+        while (i + 1 < side.size() || j + 1 < bottom.size()) {
+            const bool advanceTop = j + 1 == bottom.size() ||
+                                    (i + 1 < side.size() && param(mesh.points[side[i + 1]]) <= param(mesh.points[bottom[j + 1]]));
+            if (advanceTop) {
+                mesh.triangles.push_back({side[i], bottom[j], side[i + 1]});
+                ++i;
+            } else {
+                mesh.triangles.push_back({side[i], bottom[j], bottom[j + 1]});
+                ++j;
+            }
+        }
+    }
+    mesh.points.push_back({0.5 * width, 0.5 * height, -thickness});
+    const std::uint32_t centre = std::uint32_t(mesh.points.size() - 1);
+    for (std::size_t k = 0; k < bottomRing.size(); ++k)
+        mesh.triangles.push_back({centre, bottomRing[(k + 1) % bottomRing.size()], bottomRing[k]});
+    return mesh;
+}
+
 } // namespace
+
+TEST(TiledCompute, SlabWithLongWallTrianglesEqualsUntiled)
+{
+    // A fine irregular top next to thin walls and a bottom of long triangles: the tiles hold
+    // more or less surface per vertex than the whole mesh. When P and L chose their route per
+    // level from this mesh's counts (samples against vertices), 3 x 3 tiles took the fit
+    // where the whole mesh evaluated at the vertices: differences up to 1.0, and NaN
+    // against numbers.
+    const TriMesh mesh = slabWithLongWalls(10, 8, 0.04, 0.2, 1.5);
+    const MeshCheckResult check = checkMesh(mesh);
+    ASSERT_TRUE(check.closed);
+    ASSERT_EQ(check.numInconsistentEdges, 0u);
+    ASSERT_EQ(check.firstProblem(), "");
+    const MeshStats stats = computeMeshStats(mesh);
+    std::printf("slab with long walls: %zu vertices, median edge %.3f, longest %.2f\n", mesh.numVertices(),
+                stats.medianEdge, stats.maxEdge);
+    ASSERT_GT(stats.maxEdge, 30 * stats.medianEdge);
+    ComputeOptions co;
+    co.radius = 0.5;
+    for (int n : {2, 3, 4}) {
+        const TiledAgainstWhole t = tiledAgainstWhole(mesh, co, n);
+        expectBitIdentical(t, "slab with long walls, " + std::to_string(n) + " x " + std::to_string(n) + " tiles");
+    }
+}
 
 TEST(TiledCompute, OpenTabletEqualsUntiled)
 {
@@ -94,8 +192,8 @@ TEST(TiledCompute, OpenTabletEqualsUntiled)
         TiledComputeInfo info;
         TriMesh copy = mesh;
         const ComputeResult tiled = computeTiled(copy, co, to, &info);
-        std::size_t nanMismatches = 0;
-        const double diff = maxDifference(untiled, tiled, nanMismatches);
+        std::size_t nanMismatches = 0, compared = 0;
+        const double diff = maxDifference(untiled, tiled, nanMismatches, &compared);
         std::printf("tablet %zu vertices, %d x %d tiles (%zu computed, largest %zu vertices, halo %.2f): "
                     "max difference %.3g, NaN mismatches %zu\n",
                     mesh.numVertices(), n, n, info.tiles, info.largestTileVertices, info.haloWidth, diff,
@@ -103,6 +201,7 @@ TEST(TiledCompute, OpenTabletEqualsUntiled)
         EXPECT_EQ(info.tilesPerAxis, n);
         EXPECT_EQ(info.tiles, std::size_t(n * n));
         EXPECT_LT(info.largestTileVertices, mesh.numVertices());
+        EXPECT_GT(compared, 0u);
         EXPECT_EQ(diff, 0.0);
         EXPECT_EQ(nanMismatches, 0u);
         EXPECT_DOUBLE_EQ(tiled.voxelSize, untiled.voxelSize);
@@ -173,9 +272,10 @@ TEST(TiledCompute, TilesFromMemoryBudget)
     const ComputeResult tiled = computeTiled(copy, co, to, &info);
     EXPECT_GE(info.tilesPerAxis, 2);
     EXPECT_LE(info.estimatedPeakBytes, budget);
-    std::size_t nanMismatches = 0;
-    EXPECT_EQ(maxDifference(untiled, tiled, nanMismatches), 0.0);
+    std::size_t nanMismatches = 0, compared = 0;
+    EXPECT_EQ(maxDifference(untiled, tiled, nanMismatches, &compared), 0.0);
     EXPECT_EQ(nanMismatches, 0u);
+    EXPECT_GT(compared, 0u);
 }
 
 TEST(TiledCompute, BudgetTooSmallForOneTile)

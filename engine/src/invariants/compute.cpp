@@ -217,6 +217,7 @@ ComputeResult computeInvariants(const TriMesh& mesh, const ComputeOptions& optio
         plOptions.computePatch = options.computePatch;
         plOptions.computeLine = options.computeLine;
         plOptions.borderDistance = border;
+        plOptions.vertexSpacing = options.vertexSpacing > 0 ? options.vertexSpacing : result.stats.medianEdge;
         result.patchLine = computePatchLine(mesh, plOptions, progress);
         result.timings.samples = result.patchLine.samplingSeconds;
         result.timings.patchLine = result.patchLine.gatherSeconds;

@@ -3,6 +3,7 @@
 #include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
 #include <msii/invariants/scales.h>
+#include <msii/mesh/mesh_stats.h>
 #include <msii/mesh/vertex_normals.h>
 
 #include <tbb/blocked_range.h>
@@ -760,6 +761,13 @@ constexpr double kSameSide = 0.9;
 /// normal equations at least this (a full disc of samples gives about 0.2).
 constexpr double kWellSpread = 0.02;
 
+/// Levels whose cells are at most this many vertex spacings are evaluated at the vertices,
+/// coarser ones at the samples. On an evenly triangulated surface the samples outnumber the
+/// vertices up to cells of about 1.0-1.1 median edges. Not exactly 1: the automatic voxel
+/// is often half a median edge, which puts the second level's cells at exactly one, where
+/// the smallest change of the mesh would flip the route.
+constexpr double kDirectCellsPerSpacing = 1.2;
+
 /// Interpolates fields given at the samples of @p level (values[k·numSamples + s], k <
 /// numFields) to the points @p p with normals @p n (out[k·n + i]; points with @p skip set
 /// are left alone): a linear fit in the tangent plane (value and two slopes) over the
@@ -897,6 +905,7 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
     if (!(options.minCellsPerRadius >= 1))
         throw InvalidInputError("the precision (cells per radius) must be at least 1");
     const std::size_t nv = mesh.numVertices();
+    const double spacing = options.vertexSpacing > 0 ? options.vertexSpacing : computeMeshStats(mesh).medianEdge;
     if (!options.borderDistance.empty() && options.borderDistance.size() != nv)
         throw InvalidInputError("border distances do not match the vertex count");
     for (const Vec3& p : mesh.points) {
@@ -966,8 +975,11 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         for (std::size_t i = 0; i < nv; ++i) skip[i] = masked(i, 0);
         std::vector<float> sumP, sumL;
         const std::size_t numSamples = level.cx.size();
-        if (numSamples >= nv) {
-            // As many samples as vertices: evaluate at the vertices themselves.
+        if (level.h <= kDirectCellsPerSpacing * spacing) {
+            // Cells about the vertex spacing or finer, so about as many samples as vertices
+            // or more: evaluate at the vertices themselves. Decided from the whole mesh's
+            // spacing, not from this mesh's counts, so that a tile with more or less of the
+            // surface per vertex than the whole takes the same route (bit-identical tiles).
             evaluatePoints(level, kernel, h0, mesh.points, skip, sumP, sumL, progress);
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& range) {
                 for (std::size_t i = range.begin(); i < range.end(); ++i)

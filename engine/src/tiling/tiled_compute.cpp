@@ -88,28 +88,38 @@ Buckets bucketize(std::size_t numTiles, std::size_t count, const ForTiles& forTi
     return b;
 }
 
-/// The triangles of each grown tile (those with a vertex inside it), in mesh order, in one
-/// pass over the mesh; with only >= 0, only that tile's.
+/// The triangles of each grown tile, in mesh order, in one pass over the mesh; with
+/// only >= 0, only that tile's. A triangle belongs to every grown tile its bounding box
+/// (over the two tile axes) overlaps: a long triangle (a scan's coarse side wall next to a
+/// fine face) can pass by a tile's vertices with none of its corners in the grown tile, and
+/// its surface must still be there for them. Triangles a little beyond the grown tile do no
+/// harm: every value depends only on the surface within the halo.
 Buckets trianglesOfGrownTiles(const TriMesh& mesh, const TileGrid& g, double halo, int only)
 {
+    // The cells whose grown interval meets [lo, hi] (bounds as in inGrownCell).
+    const auto overlapped = [&](double lo, double hi, double origin, double size, int& first, int& last) {
+        const int c0 = std::max(0, g.cell(lo - halo, origin, size) - 1);
+        const int c1 = std::min(g.n - 1, g.cell(hi + halo, origin, size) + 1);
+        first = g.n, last = -1;
+        for (int i = c0; i <= c1; ++i)
+            if (hi >= origin + i * size - halo && lo <= origin + (i + 1) * size + halo)
+                first = std::min(first, i), last = i;
+    };
     return bucketize(std::size_t(g.n) * std::size_t(g.n), mesh.numTriangles(), [&](std::size_t f, const auto& add) {
         const Triangle& tri = mesh.triangles[f];
-        std::array<std::array<int, 4>, 3> boxes;
-        std::array<int, 4> all{g.n, -1, g.n, -1};
-        for (std::size_t k = 0; k < 3; ++k) {
-            boxes[k] = grownTilesOf(g, mesh.points[tri[k]], halo);
-            all = {std::min(all[0], boxes[k][0]), std::max(all[1], boxes[k][1]), std::min(all[2], boxes[k][2]),
-                   std::max(all[3], boxes[k][3])};
+        double loA = mesh.points[tri[0]][g.axisA], hiA = loA, loB = mesh.points[tri[0]][g.axisB], hiB = loB;
+        for (std::size_t k = 1; k < 3; ++k) {
+            const Vec3& p = mesh.points[tri[k]];
+            loA = std::min(loA, p[g.axisA]), hiA = std::max(hiA, p[g.axisA]);
+            loB = std::min(loB, p[g.axisB]), hiB = std::max(hiB, p[g.axisB]);
         }
-        for (int a = all[0]; a <= all[1]; ++a)
-            for (int b = all[2]; b <= all[3]; ++b) {
+        int a0, a1, b0, b1;
+        overlapped(loA, hiA, g.minA, g.sizeA, a0, a1);
+        overlapped(loB, hiB, g.minB, g.sizeB, b0, b1);
+        for (int a = a0; a <= a1; ++a)
+            for (int b = b0; b <= b1; ++b) {
                 const int t = a * g.n + b;
-                if (only >= 0 && t != only) continue;
-                for (const auto& box : boxes)
-                    if (a >= box[0] && a <= box[1] && b >= box[2] && b <= box[3]) {
-                        add(t);
-                        break;
-                    }
+                if (only < 0 || t == only) add(t);
             }
     });
 }
@@ -231,6 +241,7 @@ ComputeResult runTiles(const TriMesh& mesh, const ComputeOptions& options, const
     for (int t = 0; t < n * n; ++t) tilesWithVertices += ownVertices.begin(t) != ownVertices.end(t);
     ComputeOptions tileOptions = options;
     tileOptions.voxelSize = plan.voxelSize;  // the whole mesh's grid, so that tiles agree
+    tileOptions.vertexSpacing = options.vertexSpacing > 0 ? options.vertexSpacing : plan.stats.medianEdge;
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
     const float nan = std::numeric_limits<float>::quiet_NaN();
     std::size_t computed = 0, masked = 0;

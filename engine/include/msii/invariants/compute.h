@@ -34,6 +34,9 @@ struct ComputeOptions {
     /// exactVertices only (all vertices if empty); the others are NaN. Slow: for checking.
     bool exact = false;
     std::vector<std::uint32_t> exactVertices;
+    /// The whole mesh's median edge length, for P and L's choice of route per level
+    /// (PatchLineOptions::vertexSpacing); 0 = this mesh's. Tiles get the whole mesh's.
+    double vertexSpacing = 0;
 };
 
 struct ComputeTimings {

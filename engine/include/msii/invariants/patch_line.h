@@ -50,6 +50,12 @@ struct PatchLineOptions {
     /// reach of the kernels, at least V and S's margin (so P and L are masked wherever V
     /// and S are).
     std::vector<double> borderDistance;
+    /// Decides, per level, where P and L are evaluated: at the vertices where the level's
+    /// cells are no larger than this spacing, else at the samples (then fewer than the
+    /// vertices) with a fit to the vertices. It must describe the whole mesh, so that a tile
+    /// takes the route the whole mesh takes (tiles pass the whole mesh's); 0 = this mesh's
+    /// median edge length.
+    double vertexSpacing = 0;
 };
 
 struct PatchLineResult {
