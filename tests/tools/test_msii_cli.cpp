@@ -9,8 +9,10 @@
 
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -474,6 +476,65 @@ TEST(MsiiCli, RepairsByDefaultAndStrictRefuses)
     bool hasShare = false;
     for (const VertexProperty& p : written.vertexProperties) hasShare |= p.name == "filled_share";
     EXPECT_TRUE(hasShare);
+}
+
+// An STL file (a triangle soup: three vertices of its own per triangle, as floats) gives
+// the values of the same surface written as a PLY with shared vertices, vertex by vertex at
+// the same positions.
+TEST(MsiiCli, StlSoupGivesTheValuesOfTheSharedMesh)
+{
+    samples::SphereOptions so;
+    so.radius = 3;
+    so.spacing = 0.25;
+    TriMesh mesh = samples::makeSphere(so);
+    for (Vec3& p : mesh.points) p = {double(float(p.x)), double(float(p.y)), double(float(p.z))};
+    const std::string ply = (tempDir() / "soup-shared.ply").string(), stl = (tempDir() / "soup.stl").string();
+    writePly(ply, mesh, {});
+    {
+        std::string bytes(80, ' ');
+        const auto put = [&](const void* data, std::size_t n) { bytes.append(static_cast<const char*>(data), n); };
+        const std::uint32_t count = std::uint32_t(mesh.numTriangles());
+        put(&count, 4);
+        for (const Triangle& t : mesh.triangles) {
+            const float zero[3] = {0, 0, 0};
+            put(zero, 12);
+            for (std::uint32_t v : t) {
+                const float p[3] = {float(mesh.points[v].x), float(mesh.points[v].y), float(mesh.points[v].z)};
+                put(p, 12);
+            }
+            const std::uint16_t attributes = 0;
+            put(&attributes, 2);
+        }
+        writeFile(stl, bytes);
+    }
+    const fs::path outPly = tempDir() / "soup-shared.msii.ply", outStl = tempDir() / "soup.msii.ply";
+    RunResult r = runMsii("compute '" + ply + "' -r 1 -n 4 -q --overwrite --output '" + outPly.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = runMsii("compute '" + stl + "' -r 1 -n 4 -q --overwrite --output '" + outStl.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    ReadMeshOptions ro;
+    ro.keepVertexProperties = true;
+    const ReadMeshResult a = readMesh(outPly.string(), ro), b = readMesh(outStl.string(), ro);
+    ASSERT_EQ(b.mesh.numVertices(), a.mesh.numVertices());  // merged to shared vertices
+    std::map<std::array<double, 3>, std::size_t> at;
+    for (std::size_t i = 0; i < a.mesh.numVertices(); ++i) at[{a.mesh.points[i].x, a.mesh.points[i].y, a.mesh.points[i].z}] = i;
+    ASSERT_EQ(a.vertexProperties.size(), b.vertexProperties.size());
+    std::size_t compared = 0;
+    double largest = 0;
+    for (std::size_t i = 0; i < b.mesh.numVertices(); ++i) {
+        const auto it = at.find({b.mesh.points[i].x, b.mesh.points[i].y, b.mesh.points[i].z});
+        ASSERT_NE(it, at.end()) << i;
+        for (std::size_t k = 0; k < a.vertexProperties.size(); ++k) {
+            const float x = a.vertexProperties[k].values[it->second], y = b.vertexProperties[k].values[i];
+            ASSERT_EQ(std::isnan(x), std::isnan(y));
+            if (std::isnan(x)) continue;
+            largest = std::max(largest, double(std::abs(x - y)));
+            ++compared;
+        }
+    }
+    std::printf("STL soup against the shared PLY: %zu values compared, largest difference %.3g\n", compared, largest);
+    EXPECT_EQ(compared, a.mesh.numVertices() * a.vertexProperties.size());
+    EXPECT_LE(largest, 1e-6);
 }
 
 // --tiles and --memory-budget (issue 6): the tiled run writes the same file as the
