@@ -584,4 +584,25 @@ TEST(MsiiCli, MergeJoinsSeparateTiles)
     expectCleanFailureOf("merge", "'" + smallPatch() + "'", "is not a tile");
     expectCleanFailure("'" + smallPatch() + "' -r 0.6 --tiles 2 --tile 4", "does not exist");
     expectCleanFailure("'" + smallPatch() + "' -r 0.6 --tile 1", "goes with --tiles");
+
+    // A vertex in no face, far from the surface, widens the file's box but not the prepared
+    // mesh's, on which the tiles are cut: the parts still join to the whole result.
+    TriMesh stray = readMesh(smallPatch()).mesh;
+    stray.points.push_back({40, -30, 5});
+    const std::string strayPly = (tempDir() / "stray.ply").string();
+    writePly(strayPly, stray, {});
+    const fs::path strayWhole = tempDir() / "stray-whole.ply", strayMerged = tempDir() / "stray-merged.ply";
+    r = runMsii("compute '" + strayPly + "' -r 0.6 -n 4 -q --overwrite --output '" + strayWhole.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    parts.clear();
+    for (int t = 0; t < 4; ++t) {
+        const fs::path part = tempDir() / ("stray-part" + std::to_string(t) + ".ply");
+        r = runMsii("compute '" + strayPly + "' -r 0.6 -n 4 -q --overwrite --tiles 2 --tile " + std::to_string(t) +
+                    " --output '" + part.string() + "'");
+        ASSERT_EQ(r.code, 0) << r.err;
+        parts += " '" + part.string() + "'";
+    }
+    r = runMsii("merge" + parts + " -q --overwrite --output '" + strayMerged.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_TRUE(readFile(strayWhole.string()) == readFile(strayMerged.string()));
 }

@@ -11,6 +11,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <cmath>
 #include <regex>
 #include <set>
 
@@ -30,9 +31,24 @@ int runMerge(const MergeArgs& args)
     const std::string output = outputPath(args.parts.front(), args.output, "merged", args.overwrite);
     static const std::regex tileLine(R"(^msii tile ([0-9]+) of ([0-9]+) x ([0-9]+))");
     FeatureMesh merged;
-    std::vector<int> owner;
+    std::vector<char> written;  // per vertex: some part computed it
     std::set<int> seen;
     int tilesPerAxis = 0;
+    // Which vertices a part computed: those whose filled_share is a number (msii compute
+    // writes it for every vertex of the tile, and NaN elsewhere). Tiles are cut on the
+    // prepared mesh, whose box can differ from the file's (vertices in no face are left
+    // out), so the file's own tile grid is only the fallback for parts without it.
+    const auto computedBy = [](const FeatureMesh& part, int tile, int k) {
+        std::vector<char> own(part.mesh.numVertices(), 0);
+        for (const VertexProperty& p : part.properties)
+            if (p.name == "filled_share") {
+                for (std::size_t i = 0; i < own.size(); ++i) own[i] = !std::isnan(p.values[i]);
+                return own;
+            }
+        const std::vector<int> owner = tileOfVertices(part.mesh, k);
+        for (std::size_t i = 0; i < own.size(); ++i) own[i] = owner[i] == tile;
+        return own;
+    };
     for (const std::string& part : args.parts) {
         FeatureMesh in = readFeatureMesh(part, {});
         int tile = -1, k = 0;
@@ -43,9 +59,10 @@ int runMerge(const MergeArgs& args)
             else kept.push_back(c);
         }
         if (tile < 0) throw InvalidInputError(part + " is not a tile of msii compute --tiles K --tile I");
+        const std::vector<char> own = computedBy(in, tile, k);
         if (merged.properties.empty()) {
             tilesPerAxis = k;
-            owner = tileOfVertices(in.mesh, k);
+            written = own;
             merged = std::move(in);
             merged.comments = kept;
         } else {
@@ -55,17 +72,23 @@ int runMerge(const MergeArgs& args)
             for (std::size_t q = 0; q < in.properties.size(); ++q) {
                 if (in.properties[q].name != merged.properties[q].name)
                     throw InvalidInputError(part + " has other features than " + args.parts.front());
-                for (std::size_t i = 0; i < owner.size(); ++i)
-                    if (owner[i] == tile) merged.properties[q].values[i] = in.properties[q].values[i];
+                for (std::size_t i = 0; i < own.size(); ++i)
+                    if (own[i]) merged.properties[q].values[i] = in.properties[q].values[i];
             }
+            for (std::size_t i = 0; i < own.size(); ++i) written[i] |= own[i];
         }
         if (!seen.insert(tile).second) throw InvalidInputError("tile " + std::to_string(tile) + " is given twice");
     }
-    // Every tile that owns a vertex must be there.
-    for (int t : std::set<int>(owner.begin(), owner.end()))
-        if (!seen.count(t))
-            throw InvalidInputError("tile " + std::to_string(t) + " of " + std::to_string(tilesPerAxis) + " x " +
-                                    std::to_string(tilesPerAxis) + " is missing");
+    // Every vertex of a face must have been computed by some part; else a tile is missing.
+    for (const Triangle& t : merged.mesh.triangles)
+        for (std::uint32_t v : t)
+            if (!written[v]) {
+                for (int tile = 0; tile < tilesPerAxis * tilesPerAxis; ++tile)
+                    if (!seen.count(tile))
+                        throw InvalidInputError("tile " + std::to_string(tile) + " of " + std::to_string(tilesPerAxis) +
+                                                " x " + std::to_string(tilesPerAxis) + " is missing");
+                throw InvalidInputError("vertex " + std::to_string(v) + " was computed by none of the parts");
+            }
     WritePlyOptions plyOptions;
     plyOptions.comments = merged.comments;
     writePly(output, merged.mesh, merged.properties, plyOptions);
