@@ -237,11 +237,11 @@ int main(int argc, char** argv)
         }
         {
             TriMesh holed = mesh;
-            std::vector<char> gone(nv, 0);
-            for (std::size_t k = 0; k < 100; ++k) gone[(2 * k + 1) * nv / 200 + nv / 400] = 1;  // spread evenly
-            holed.triangles.erase(std::remove_if(holed.triangles.begin(), holed.triangles.end(),
-                                                 [&](const Triangle& t) { return gone[t[0]] || gone[t[1]] || gone[t[2]]; }),
-                                  holed.triangles.end());
+            samples::HoleOptions holes;  // 100 seeded pin-holes, up to one spacing around
+            holes.count = 100;
+            holes.minSize = 0.5 * spacing;
+            holes.maxSize = spacing;
+            samples::punchHoles(holed, holes);
             const Stopwatch preparing;
             holesFilled = prepareMesh(holed, po).holes.numFilled;
             prepareHoles.push_back(preparing.seconds());

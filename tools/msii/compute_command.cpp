@@ -257,9 +257,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     if (!args.quiet)
         for (const PrepareChange& c : prepared.changes)
             std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), c.message.c_str());
-    std::vector<float> filledShare = prepared.filledShare.empty()
-                                         ? std::vector<float>(prepared.mesh.numVertices(), 0.0f)
-                                         : prepared.filledShare;
+    const std::vector<float>& filledShare = prepared.filledShare;  // radius given: one per vertex
 
     ComputeOptions options;
     options.radius = args.radius;

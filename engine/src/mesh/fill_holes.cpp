@@ -2,6 +2,8 @@
 // Processing is GPL-3.0+, which is why msii is).
 #include <msii/mesh/fill_holes.h>
 
+#include "mesh_topology.h"
+
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Surface_mesh.h>
@@ -10,7 +12,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -45,12 +46,6 @@ struct Patch {
     double area = 0;
 };
 
-std::uint32_t findRoot(std::vector<std::uint32_t>& parent, std::uint32_t v)
-{
-    while (parent[v] != v) v = parent[v] = parent[parent[v]];
-    return v;
-}
-
 /// Traces the loops of the border edges (each border vertex of a vertex-manifold mesh starts
 /// exactly one border edge). Loops come in the order of their smallest start vertex.
 std::vector<Loop> traceLoops(const TriMesh& mesh, std::vector<std::array<std::uint32_t, 2>> edges)
@@ -82,8 +77,7 @@ std::vector<Loop> traceLoops(const TriMesh& mesh, std::vector<std::array<std::ui
 }
 
 /// Fills one loop on a local copy of the triangles within kRings of it.
-Patch fillLoop(const TriMesh& mesh, const std::vector<std::uint32_t>& offsets,
-               const std::vector<std::uint32_t>& incident, const Loop& loop)
+Patch fillLoop(const TriMesh& mesh, const detail::VertexTriangles& around, const Loop& loop)
 {
     Patch patch;
     // The local triangles, ring by ring, in mesh order.
@@ -93,8 +87,8 @@ Patch fillLoop(const TriMesh& mesh, const std::vector<std::uint32_t>& offsets,
     for (int ring = 0; ring < kRings; ++ring) {
         std::vector<std::uint32_t> next;
         for (std::uint32_t v : frontier)
-            for (std::uint32_t k = offsets[v]; k < offsets[v + 1]; ++k) {
-                const std::uint32_t f = incident[k];
+            for (std::uint32_t k = around.offsets[v]; k < around.offsets[v + 1]; ++k) {
+                const std::uint32_t f = around.triangles[k];
                 if (!faceSet.insert(f).second) continue;
                 for (std::uint32_t w : mesh.triangles[f])
                     if (seen.insert(w).second) next.push_back(w);
@@ -190,22 +184,15 @@ FillHolesResult fillHoles(TriMesh& mesh, const std::vector<std::array<std::uint3
     if (loops.empty()) return result;
 
     // Connected parts (over shared vertices) and their areas, for the outer-border rule.
-    const std::size_t nv = mesh.numVertices();
-    std::vector<std::uint32_t> parent(nv);
-    std::iota(parent.begin(), parent.end(), 0u);
-    for (const Triangle& t : mesh.triangles)
-        for (int k = 1; k < 3; ++k) {
-            const std::uint32_t a = findRoot(parent, t[0]), b = findRoot(parent, t[std::size_t(k)]);
-            if (a != b) parent[std::max(a, b)] = std::min(a, b);
-        }
+    const std::vector<std::uint32_t> part = detail::vertexParts(mesh);
     std::unordered_map<std::uint32_t, double> partArea;
     for (const Triangle& t : mesh.triangles) {
         const Vec3 &a = mesh.points[t[0]], &b = mesh.points[t[1]], &c = mesh.points[t[2]];
-        partArea[findRoot(parent, t[0])] += 0.5 * norm(cross(b - a, c - a));
+        partArea[part[t[0]]] += 0.5 * norm(cross(b - a, c - a));
     }
     std::unordered_map<std::uint32_t, std::size_t> longest;  // part -> its longest loop
     for (std::size_t i = 0; i < loops.size(); ++i) {
-        loops[i].component = findRoot(parent, loops[i].vertices.front());
+        loops[i].component = part[loops[i].vertices.front()];
         const auto [it, fresh] = longest.emplace(loops[i].component, i);
         if (!fresh && loops[i].perimeter > loops[it->second].perimeter) it->second = i;
     }
@@ -226,20 +213,10 @@ FillHolesResult fillHoles(TriMesh& mesh, const std::vector<std::array<std::uint3
     }
     if (chosen.empty()) return result;
 
-    // Triangles around each vertex (counting sort), for the local meshes.
-    std::vector<std::uint32_t> offsets(nv + 1, 0), incident(3 * mesh.numTriangles());
-    for (const Triangle& t : mesh.triangles)
-        for (std::uint32_t v : t) ++offsets[v + 1];
-    for (std::size_t v = 0; v < nv; ++v) offsets[v + 1] += offsets[v];
-    {
-        std::vector<std::uint32_t> fill(offsets.begin(), offsets.end() - 1);
-        for (std::size_t f = 0; f < mesh.numTriangles(); ++f)
-            for (std::uint32_t v : mesh.triangles[f]) incident[fill[v]++] = std::uint32_t(f);
-    }
-
+    const detail::VertexTriangles around = detail::vertexTriangles(mesh);  // for the local meshes
     std::vector<Patch> patches(chosen.size());
     tbb::parallel_for(std::size_t(0), chosen.size(),
-                      [&](std::size_t k) { patches[k] = fillLoop(mesh, offsets, incident, loops[chosen[k]]); });
+                      [&](std::size_t k) { patches[k] = fillLoop(mesh, around, loops[chosen[k]]); });
 
     for (std::size_t k = 0; k < chosen.size(); ++k) {
         const Patch& patch = patches[k];

@@ -1,8 +1,10 @@
 #include <msii/mesh/prepare_mesh.h>
 
 #include "blocks.h"
+#include "mesh_topology.h"
 
 #include <msii/core/errors.h>
+#include <msii/mesh/mesh_check.h>
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -19,19 +21,15 @@ namespace msii {
 
 namespace {
 
+using detail::findRoot;
 using detail::forEachBlock;
 using detail::numBlocks;
+using detail::unite;
 constexpr std::uint32_t kNone = PrepareMeshResult::kNoVertex;
 
 std::string plural(std::size_t n, const char* one, const char* many)
 {
     return std::to_string(n) + " " + (n == 1 ? one : many);
-}
-
-std::uint32_t findRoot(std::vector<std::uint32_t>& parent, std::uint32_t v)
-{
-    while (parent[v] != v) v = parent[v] = parent[parent[v]];
-    return v;
 }
 
 /// Bit pattern of a point, for exact equality of positions (0.0 and -0.0 are one position).
@@ -84,31 +82,12 @@ std::vector<std::uint32_t> samePositionRepresentatives(const std::vector<Vec3>& 
     return rep;
 }
 
-/// Triangles around each vertex (counting sort, in face order).
-struct Incidence {
-    std::vector<std::uint32_t> offsets, faces;
-};
-Incidence incidence(const TriMesh& mesh)
-{
-    Incidence inc;
-    const std::size_t nv = mesh.numVertices();
-    inc.offsets.assign(nv + 1, 0);
-    for (const Triangle& t : mesh.triangles)
-        for (std::uint32_t v : t) ++inc.offsets[v + 1];
-    for (std::size_t v = 0; v < nv; ++v) inc.offsets[v + 1] += inc.offsets[v];
-    inc.faces.resize(3 * mesh.numTriangles());
-    std::vector<std::uint32_t> fill(inc.offsets.begin(), inc.offsets.end() - 1);
-    for (std::size_t f = 0; f < mesh.numTriangles(); ++f)
-        for (std::uint32_t v : mesh.triangles[f]) inc.faces[fill[v]++] = std::uint32_t(f);
-    return inc;
-}
-
 /// Splits every vertex whose faces form more than one fan (faces joined through edges at
 /// the vertex): the fan of its first face keeps the vertex, each other fan gets a copy
 /// appended to the points. Returns the number of vertices split.
 std::size_t splitNonManifoldVertices(TriMesh& mesh)
 {
-    const Incidence inc = incidence(mesh);
+    const detail::VertexTriangles inc = detail::vertexTriangles(mesh);
     const std::size_t nv = mesh.numVertices();
     // Per vertex, the fan (0 = first) of each incident face, where there is more than one.
     struct Split {
@@ -125,27 +104,23 @@ std::size_t splitNonManifoldVertices(TriMesh& mesh)
             if (count < 2) continue;
             others.clear();
             for (std::uint32_t k = 0; k < count; ++k)
-                for (std::uint32_t w : mesh.triangles[inc.faces[first + k]])
+                for (std::uint32_t w : mesh.triangles[inc.triangles[first + k]])
                     if (w != v) others.emplace_back(w, k);
             std::sort(others.begin(), others.end());
             parent.resize(count);
             std::iota(parent.begin(), parent.end(), 0u);
             for (std::size_t i = 1; i < others.size(); ++i)
-                if (others[i].first == others[i - 1].first) {
-                    const std::uint32_t a = findRoot(parent, others[i].second),
-                                        c = findRoot(parent, others[i - 1].second);
-                    if (a != c) parent[std::max(a, c)] = std::min(a, c);
-                }
+                if (others[i].first == others[i - 1].first) unite(parent, others[i].second, others[i - 1].second);
+            // Nearly every vertex has one fan: count the roots before numbering the fans.
             std::uint32_t numFans = 0;
-            std::vector<std::uint32_t> fanOfRoot(count, kNone), fans(count);
-            for (std::uint32_t k = 0; k < count; ++k) {
-                const std::uint32_t r = findRoot(parent, k);
-                if (fanOfRoot[r] == kNone) fanOfRoot[r] = numFans++;
-                fans[k] = fanOfRoot[r];
-            }
+            for (std::uint32_t k = 0; k < count; ++k) numFans += findRoot(parent, k) == k;
             if (numFans < 2) continue;
+            // Every face points to a smaller face of its fan (unite keeps the smaller root,
+            // path halving only shortens), so fans number in the order of their first faces.
+            std::vector<std::uint32_t> fans(count);
+            for (std::uint32_t k = 0, next = 0; k < count; ++k) fans[k] = parent[k] == k ? next++ : fans[parent[k]];
             Split s{std::uint32_t(v), {}, std::move(fans), numFans};
-            s.faces.assign(inc.faces.begin() + first, inc.faces.begin() + first + count);
+            s.faces.assign(inc.triangles.begin() + first, inc.triangles.begin() + first + count);
             blocks[b].push_back(std::move(s));
         }
     });
@@ -234,16 +209,7 @@ std::size_t orientCoherently(TriMesh& mesh)
 /// inside out, so that every closed part faces outward. Returns the parts turned.
 std::size_t turnClosedPartsOutward(TriMesh& mesh, const MeshCheckResult& check, std::size_t& facesTurned)
 {
-    const std::size_t nv = mesh.numVertices();
-    std::vector<std::uint32_t> parent(nv);
-    std::iota(parent.begin(), parent.end(), 0u);
-    for (const Triangle& t : mesh.triangles)
-        for (int k = 1; k < 3; ++k) {
-            const std::uint32_t a = findRoot(parent, t[0]), b = findRoot(parent, t[std::size_t(k)]);
-            if (a != b) parent[std::max(a, b)] = std::min(a, b);
-        }
-    std::vector<std::uint32_t> root(nv);
-    for (std::size_t v = 0; v < nv; ++v) root[v] = findRoot(parent, std::uint32_t(v));
+    const std::vector<std::uint32_t> root = detail::vertexParts(mesh);
     std::unordered_set<std::uint32_t> open;
     for (const auto& e : check.borderEdges) open.insert(root[e[0]]);
     // Signed volume relative to each part's first vertex (small numbers far from the origin).
@@ -462,20 +428,19 @@ PrepareMeshResult prepareMesh(const TriMesh& input, const PrepareMeshOptions& op
                 << result.holes.largestPerimeter << " around, " << result.holes.areaAdded
                 << " of area added); values near them rest partly on the filled surface (filled_share)";
             result.changes.push_back({"holes_filled", result.holes.numFilled, msg.str()});
-            check = checkMesh(mesh);
         }
         if (result.holes.numFailed > 0)
             result.changes.push_back({"holes_not_filled", result.holes.numFailed,
                                       "could not fill " + plural(result.holes.numFailed, "hole", "holes") +
                                           "; values near them stay masked"});
     }
-    if (result.holes.numFilled > 0 && options.radius > 0)
-        result.filledShare = filledShareOf(mesh, result.firstFillTriangle, options.radius);
+    if (options.radius > 0)
+        result.filledShare = result.holes.numFilled > 0 ? filledShareOf(mesh, result.firstFillTriangle, options.radius)
+                                                        : std::vector<float>(mesh.numVertices(), 0.0f);
     if (result.numIsolatedVertices > 0)
         result.changes.push_back({"isolated_vertices", result.numIsolatedVertices,
                                   plural(result.numIsolatedVertices, "vertex belongs", "vertices belong") +
                                       " to no face: no values there (NaN)"});
-    result.check = std::move(check);
     return result;
 }
 

@@ -17,7 +17,6 @@
 /// input's vertices and faces in the input's order.
 
 #include <msii/mesh/fill_holes.h>
-#include <msii/mesh/mesh_check.h>
 #include <msii/mesh/trimesh.h>
 
 #include <cstddef>
@@ -55,13 +54,12 @@ struct PrepareMeshResult {
     /// mesh.triangles[firstFillTriangle ...] are hole fill.
     std::size_t firstFillTriangle = 0;
     /// Per vertex of `mesh`: the area of fill inside the ball of radius options.radius,
-    /// divided by πR² (the area a flat disc has there), capped at 1. Empty if nothing was
-    /// filled or no radius was given.
+    /// divided by πR² (the area a flat disc has there), capped at 1; 0 where nothing was
+    /// filled. Empty if no radius was given.
     std::vector<float> filledShare;
     FillHolesResult holes;
     std::vector<PrepareChange> changes;   ///< one per kind of change made
     std::size_t numIsolatedVertices = 0;  ///< input vertices in no face
-    MeshCheckResult check;                ///< of `mesh`
 };
 
 /// Prepares @p input for the computation (see the file comment).
