@@ -166,6 +166,7 @@ TEST(MsiiCli, BadInputFailsCleanly)
     expectCleanFailure(patch + " -r 1 -n 100000", "scales");
     expectCleanFailure(patch + " -r 1e9", "radius");
     expectCleanFailure(patch + " -r 1 --invariants V,Q", "unknown invariant 'Q'");
+    expectCleanFailure(patch + " -r 1 --fill-holes -3", "the hole size must be 0 (fill none) or a positive length");
     expectCleanFailure(patch + " -r 1 --pl-precision 0.5", "P and L precision");
     expectCleanFailure(patch + " -r 1 --pl-precision 0", "P and L precision");
     expectCleanFailure(patch + " -r 1 --pl-precision 100", "P and L precision");

@@ -698,7 +698,12 @@ std::function<int()> addComputeCommand(CLI::App& app)
                     "Fill holes whose border is at most SIZE long (mesh units), for the computation only; "
                     "default pi*R (holes up to about R across); 0 fills none")
         ->type_name("SIZE")
-        ->check(CLI::NonNegativeNumber);
+        ->check([](const std::string& text) -> std::string {
+            char* end = nullptr;
+            const double v = std::strtod(text.c_str(), &end);
+            if (end == text.c_str()) return {};  // not a number: CLI11 says so
+            return v >= 0 && std::isfinite(v) ? std::string() : "the hole size must be 0 (fill none) or a positive length";
+        });
     cmd->add_option("--invariants", args->invariants,
                     "Which invariants, comma-separated (default V,S,P,L)");
     cmd->add_flag("--no-sphere", args->noSphere, "Leave out S (same as omitting it from --invariants)");
