@@ -339,6 +339,7 @@ void validate(const HeightFieldOptions& o)
     requirePositive(o.height, "height");
     requirePositive(o.spacing, "spacing");
     if (o.closed) requirePositive(o.thickness, "thickness");
+    requireNonNegative(o.wallStep, "wall step");
     if (o.kind == HeightFieldKind::Terrain) {
         if (!std::isfinite(o.relief)) throw InvalidInputError("sample mesh: relief must be finite.");
         requirePositive(o.hillWidth, "hill width");
@@ -767,10 +768,10 @@ namespace {
 bool sameOptions(const HeightFieldOptions& a, const HeightFieldOptions& b)
 {
     // Adding a field to HeightFieldOptions changes the size: compare it here too.
-    static_assert(sizeof(HeightFieldOptions) == 12 * sizeof(double) + 2 * sizeof(std::uint64_t),
+    static_assert(sizeof(HeightFieldOptions) == 13 * sizeof(double) + 2 * sizeof(std::uint64_t),
                   "update sameOptions for the new HeightFieldOptions field");
     return a.kind == b.kind && a.width == b.width && a.height == b.height && a.spacing == b.spacing &&
-           a.closed == b.closed && a.thickness == b.thickness && a.relief == b.relief &&
+           a.closed == b.closed && a.thickness == b.thickness && a.wallStep == b.wallStep && a.relief == b.relief &&
            a.hillWidth == b.hillWidth && a.sag == b.sag && a.wedgeSize == b.wedgeSize &&
            a.wedgeDensity == b.wedgeDensity && a.wedgeMargin == b.wedgeMargin && a.noise == b.noise &&
            a.seed == b.seed;
@@ -831,6 +832,65 @@ struct HeightLattice {
     }
 };
 
+/// Closes the open top (border vertices at lattice positions i = 0, nx and j = 0, ny) with
+/// walls and a bottom of long triangles: each side's fine border polyline is zipped to
+/// bottom vertices about @p step apart, by their parameter along the side, and the bottom
+/// is a fan around its centre (HeightFieldOptions::wallStep).
+template <class TopIndex>
+void addLongWalls(TriMesh& mesh, int nx, int ny, const TopIndex& top, double bottomZ, double step)
+{
+    // The four sides counter-clockwise seen from above, as top border vertices.
+    std::vector<std::vector<std::uint32_t>> sides(4);
+    for (int i = 0; i <= nx; ++i) sides[0].push_back(top(i, 0));
+    for (int j = 0; j <= ny; ++j) sides[1].push_back(top(nx, j));
+    for (int i = nx; i >= 0; --i) sides[2].push_back(top(i, ny));
+    for (int j = ny; j >= 0; --j) sides[3].push_back(top(0, j));
+    std::array<std::uint32_t, 4> corner{};  // bottom corners below the top's corners
+    for (std::size_t k = 0; k < 4; ++k) {
+        const Vec3 p = mesh.points[sides[k].front()];
+        mesh.points.push_back({p.x, p.y, bottomZ});
+        corner[k] = std::uint32_t(mesh.points.size() - 1);
+    }
+    std::vector<std::uint32_t> bottomRing;
+    for (std::size_t k = 0; k < 4; ++k) {
+        const std::vector<std::uint32_t>& side = sides[k];
+        const Vec3 a = mesh.points[side.front()], b = mesh.points[side.back()];
+        const int segments = std::max(1, int(std::lround(norm(b - a) / step)));
+        std::vector<std::uint32_t> bottom{corner[k]};
+        for (int q = 1; q < segments; ++q) {
+            const Vec3 p = a + (b - a) * (double(q) / segments);
+            mesh.points.push_back({p.x, p.y, bottomZ});
+            bottom.push_back(std::uint32_t(mesh.points.size() - 1));
+        }
+        bottom.push_back(corner[(k + 1) % 4]);
+        bottomRing.insert(bottomRing.end(), bottom.begin(), bottom.end() - 1);
+        const double length = norm(Vec3(b.x - a.x, b.y - a.y, 0));
+        const auto param = [&](std::uint32_t v) {
+            const Vec3& p = mesh.points[v];
+            return norm(Vec3(p.x - a.x, p.y - a.y, 0)) / length;
+        };
+        std::size_t i = 0, j = 0;
+        while (i + 1 < side.size() || j + 1 < bottom.size()) {
+            const bool advanceTop =
+                j + 1 == bottom.size() || (i + 1 < side.size() && param(side[i + 1]) <= param(bottom[j + 1]));
+            if (advanceTop) {
+                mesh.triangles.push_back({side[i], bottom[j], side[i + 1]});
+                ++i;
+            } else {
+                mesh.triangles.push_back({side[i], bottom[j], bottom[j + 1]});
+                ++j;
+            }
+        }
+    }
+    Vec3 centre{0, 0, bottomZ};
+    for (const std::uint32_t v : bottomRing) centre = centre + Vec3(mesh.points[v].x, mesh.points[v].y, 0);
+    centre = {centre.x / double(bottomRing.size()), centre.y / double(bottomRing.size()), bottomZ};
+    mesh.points.push_back(centre);
+    const std::uint32_t c = std::uint32_t(mesh.points.size() - 1);
+    for (std::size_t k = 0; k < bottomRing.size(); ++k)
+        mesh.triangles.push_back({c, bottomRing[(k + 1) % bottomRing.size()], bottomRing[k]});
+}
+
 TriMesh makeHeightField(const HeightFieldOptions& options)
 {
     const HeightFunction height(options);  // validates
@@ -871,6 +931,12 @@ TriMesh makeHeightField(const HeightFieldOptions& options)
         throw InvalidInputError("sample mesh: slab thickness " + formatNumber(options.thickness) +
                                 " does not reach below the lowest top point (z = " + formatNumber(lowestTop) + ").");
 
+    if (options.wallStep > 0) {
+        mesh.triangles.resize(numTopTriangles);
+        triangulateGrid(mesh.points, nx, ny, topIndex, seed, kStreamDiagonal, false, mesh.triangles.data());
+        addLongWalls(mesh, nx, ny, topIndex, bottomZ, options.wallStep);
+        return mesh;
+    }
     // Perimeter positions, counter-clockwise seen from above (the way the top triangles run
     // along the border): bottom side +x, right side +y, top side -x, left side -y.
     std::vector<std::array<int, 2>> border(perimeter);

@@ -114,6 +114,10 @@ int main(int argc, char** argv)
     auto* optHeight = app.add_option("--height", height, "plane/terrain/tablet: extent along y, mm (default 15)");
     auto* optClosed = app.add_flag("--closed", closed, "plane/terrain/tablet: closed slab instead of an open patch");
     auto* optThickness = app.add_option("--thickness", thickness, "slab thickness below z = 0, mm (default 5)");
+    double wallStep = 0;
+    auto* optWallStep = app.add_option("--wall-step", wallStep,
+                                       "with --closed: walls and bottom of a few long triangles, bottom outline vertices "
+                                       "this far apart, mm (as many meshers make them; default: as fine as the top)");
     auto* optRelief = app.add_option("--relief", relief, "terrain: hill amplitude, mm (default 1)");
     auto* optNoise = app.add_option("--noise", noise, "terrain/tablet: smooth noise amplitude, mm (default 0.002)");
     auto* optWedgeSize = app.add_option("--wedge-size", wedgeSize, "tablet: mean wedge length, mm (default 1.5)");
@@ -154,6 +158,7 @@ int main(int argc, char** argv)
             {optHeight, {"plane", "terrain", "tablet"}},
             {optClosed, {"plane", "terrain", "tablet"}},
             {optThickness, {"plane", "terrain", "tablet"}},
+            {optWallStep, {"plane", "terrain", "tablet"}},
             {optRelief, {"terrain"}},
             {optNoise, {"terrain", "tablet"}},
             {optWedgeSize, {"tablet"}},
@@ -163,6 +168,7 @@ int main(int argc, char** argv)
             if (opt->count() > 0 && shapes.count(shape) == 0)
                 throw UsageError("option " + opt->get_name() + " does not apply to shape " + shape);
         if (optThickness->count() > 0 && !closed) throw UsageError("--thickness needs --closed");
+        if (optWallStep->count() > 0 && !closed) throw UsageError("--wall-step needs --closed");
         if (optHoleSize->count() > 0 && holes == 0) throw UsageError("--hole-size needs --holes");
 
         msii::TriMesh mesh;
@@ -193,6 +199,7 @@ int main(int argc, char** argv)
             if (optWidth->count()) o.width = width;
             if (optHeight->count()) o.height = height;
             if (optThickness->count()) o.thickness = thickness;
+            o.wallStep = wallStep;
             if (optRelief->count()) o.relief = relief;
             if (optNoise->count()) o.noise = noise;
             if (optWedgeSize->count()) o.wedgeSize = wedgeSize;
@@ -201,6 +208,7 @@ int main(int argc, char** argv)
             o.seed = seed;
             comment << " width " << o.width << " height " << o.height << " spacing " << o.spacing;
             if (o.closed) comment << " closed thickness " << o.thickness;
+            if (o.wallStep > 0) comment << " wall step " << o.wallStep;
             if (!o.closed && !ascii && holes == 0) {
                 // Streamed: never held in memory, so any size the disk takes.
                 msii::WritePlyOptions plyOptions;

@@ -126,17 +126,41 @@ TriangleFrame makeFrame(const Vec3& a, const Vec3& b, const Vec3& c)
     return f;
 }
 
+/// A complex number, for sums of angles as arguments of products (one atan2 for many).
+struct Complex {
+    double re = 1, im = 0;
+    void multiply(double r, double i)
+    {
+        const double t = re * r - im * i;
+        im = re * i + im * r;
+        re = t;
+    }
+    double arg() const { return std::atan2(im, re); }
+};
+
+/// Van Oosterom and Strackee's formula for the solid angle Ω of the triangle q (corners
+/// relative to p, at distances la, lb, lc): Ω/2 = arg(|a||b||c| + (a·b)|c| + (a·c)|b| +
+/// (b·c)|a| + i a·(b×c)) (a·(b×c) = 2·area·d, so Ω has the sign of d).
+Complex vanOosterom(const std::array<Vec3, 3>& q, double la, double lb, double lc)
+{
+    const Vec3 &a = q[0], &b = q[1], &c = q[2];
+    return {la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la, dot(a, cross(b, c))};
+}
+
 /// One triangle as seen from p: everything that does not depend on the radius.
 class LocalTriangle {
 public:
     LocalTriangle(const Vec3& p, const std::array<Vec3, 3>& corners, const TriangleFrame& frame)
-        : mArea(frame.area)
+        : LocalTriangle({corners[0] - p, corners[1] - p, corners[2] - p}, frame)
     {
-        std::array<Vec3, 3> q;
+    }
+
+    /// @p q: the corners relative to p.
+    LocalTriangle(const std::array<Vec3, 3>& q, const TriangleFrame& frame) : mQ(q), mArea(frame.area)
+    {
         int nearest = 0;
         double far2 = 0, near2 = std::numeric_limits<double>::infinity();
         for (int i = 0; i < 3; ++i) {
-            q[i] = corners[i] - p;
             const double q2 = squaredNorm(q[i]);
             if (q2 < near2) near2 = q2, nearest = i;
             far2 = std::max(far2, q2);
@@ -150,26 +174,18 @@ public:
         mFar = std::sqrt(far2);
         const double inPlane = originTriangleDistance2D(mX, mY);
         mNear = std::sqrt(mD * mD + inPlane * inPlane);
-        mQ = q;
     }
 
     double distance() const { return mD; }
     double nearestDistance() const { return mNear; }  ///< distance from p to the triangle
     double farthestDistance() const { return mFar; }  ///< distance from p to its farthest corner
 
-    /// The whole triangle (inside the ball): area, no arc, solid angle by Van Oosterom and
-    /// Strackee's formula, tan(Ω/2) = a·(b×c) / (|a||b||c| + (a·b)|c| + (a·c)|b| + (b·c)|a|)
-    /// (a·(b×c) = 2·area·d, so Ω has the sign of d).
+    /// The whole triangle (inside the ball): area, no arc, solid angle (vanOosterom()).
     Measures whole(bool solid) const
     {
         Measures m;
         m.area = mArea;
-        if (solid && mD != 0) {
-            const Vec3 &a = mQ[0], &b = mQ[1], &c = mQ[2];
-            const double la = norm(a), lb = norm(b), lc = norm(c);
-            const double den = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
-            m.solidAngle = 2.0 * std::atan2(dot(a, cross(b, c)), den);
-        }
+        if (solid && mD != 0) m.solidAngle = 2.0 * vanOosterom(mQ, norm(mQ[0]), norm(mQ[1]), norm(mQ[2])).arg();
         return m;
     }
 
@@ -196,9 +212,10 @@ public:
     }
 
 private:
-    double mX[3], mY[3];
     std::array<Vec3, 3> mQ;
-    double mArea, mD, mNear, mFar;
+    double mArea;
+    double mX[3], mY[3];
+    double mD, mNear, mFar;
 };
 
 // ---------------------------------------------------------------------------------------
@@ -304,28 +321,47 @@ public:
         mFirst.push_back(std::uint32_t(nt));
     }
 
-    /// Calls @p visit(triangle) for every triangle that may meet B_radius(p), each once, in
-    /// an order that depends only on p and the radius.
+    std::size_t size() const { return mTriangles.size(); }
+    /// The triangle in slot @p s: slots run cell by cell, so a cell's triangles lie together.
+    std::uint32_t triangleAt(std::size_t s) const { return mTriangles[s]; }
+
+    /// Calls @p visit(slot) for the slots of every cell that may hold a triangle meeting
+    /// B_radius(p), each once, in an order that depends only on p and the radius.
     template <class Visit> void forEachNear(const Vec3& p, double radius, Visit&& visit) const
     {
         const double reach = radius + mReach;
+        // Cells are culled by their distance to p (with a margin for rounding in the binning).
+        const double cellReach = reach + 1e-6 * mCell, cellReach2 = cellReach * cellReach;
         std::int64_t lo[3], hi[3];
         for (int i = 0; i < 3; ++i) {
             lo[i] = clampIndex(i, (p[i] - reach - mOrigin[i]) / mCell);
             hi[i] = clampIndex(i, (p[i] + reach - mOrigin[i]) / mCell);
         }
-        for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
-            for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
-                for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
-                    const std::uint64_t k = key(x, y, z);
-                    const auto it = std::lower_bound(mKeys.begin(), mKeys.end(), k);
-                    if (it == mKeys.end() || *it != k) continue;
+        for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
+            const double gx = gap(0, x, p.x);
+            for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
+                const double gy = gap(1, y, p.y), gxy = gx * gx + gy * gy;
+                if (gxy > cellReach2) continue;
+                // A column's cells are consecutive keys: one search, then a walk.
+                const std::uint64_t column = key(x, y, 0), last = column + std::uint64_t(hi[2]);
+                auto it = std::lower_bound(mKeys.begin(), mKeys.end(), column + std::uint64_t(lo[2]));
+                for (; it != mKeys.end() && *it <= last; ++it) {
+                    const double gz = gap(2, std::int64_t(*it - column), p.z);
+                    if (gxy + gz * gz > cellReach2) continue;
                     const std::size_t cell = std::size_t(it - mKeys.begin());
-                    for (std::uint32_t s = mFirst[cell]; s < mFirst[cell + 1]; ++s) visit(mTriangles[s]);
+                    for (std::uint32_t s = mFirst[cell]; s < mFirst[cell + 1]; ++s) visit(s);
                 }
+            }
+        }
     }
 
 private:
+    /// Distance along @p axis from @p coordinate to the cells of index @p index.
+    double gap(int axis, std::int64_t index, double coordinate) const
+    {
+        const double lo = mOrigin[axis] + double(index) * mCell, hi = lo + mCell;
+        return coordinate < lo ? lo - coordinate : (coordinate > hi ? coordinate - hi : 0.0);
+    }
     std::int64_t clampIndex(int axis, double coordinate) const
     {
         if (!(coordinate > 0)) return 0;  // also NaN
@@ -343,6 +379,300 @@ private:
     std::int64_t mCount[3] = {1, 1, 1};
     std::vector<std::uint64_t> mKeys;
     std::vector<std::uint32_t> mFirst, mTriangles;
+};
+
+// ---------------------------------------------------------------------------------------
+// The per-vertex sums. Every triangle near p adds to the radii whose sphere it straddles
+// (sectors) and, once, to the first radius whose ball holds it whole: a difference array
+// over the radii, summed at the end. The formulas are LocalTriangle's, arranged so that
+// most triangles cost no transcendental call:
+// - whole triangles: the solid angles Ω_t of one radius are summed as arguments of a
+//   product of Van Oosterom's complex numbers (vanOosterom()), one atan2 for many
+//   triangles. A triangle inside a sphere of radius ρ_t at distance D from p subtends at
+//   most 2π(1 − sqrt(1 − ρ_t²/D²)) <= 2πρ_t²/D², and the product is resolved before these
+//   bounds of its half-angles reach π/2, so its argument is never wrapped;
+// - straddled triangles: the signed sector angles of the three edges add up to Φ = 2π if
+//   the foot point c lies inside the triangle and 0 if outside, so the disc pieces
+//   together span Φ − Σ σΔφ over the line pieces (edge inside the disc), and only those
+//   are evaluated. Over the line pieces, Σ σΔφ/2 is the argument of a product of
+//   half-angle numbers |X1||X2| + X1·X2 + i X1×X2, and their solid angle Σ σ sgn(d)(Δφ −
+//   Δψ) is twice the argument of a product of Van Oosterom's numbers for the triangles
+//   (c, X1, X2). Both sums lie in [0, 2π) (c inside) or (−π, π) (c outside: the pieces
+//   lie within the triangle's angle at c, less than π), so the halved arguments are
+//   recovered exactly, with one unwrap near π when c is inside. At a piece's end the
+//   distance to p is r (cut by the sphere) or the corner's distance. When c is close to
+//   an edge's line these products lose precision (X1 and X2 nearly opposite), and
+//   LocalTriangle's sectors are used instead.
+
+/// A triangle with what the per-vertex loop needs, stored in grid-slot order; its bounding
+/// sphere, which every visited triangle is tested against, is kept apart (SlotBound).
+struct SlotTriangle {
+    Vec3 corner[3];
+    Vec3 n;
+    double area;
+    Vec3 t1, t2;
+    // Edge i → i + 1 in the frame (t1, t2) with corner 0 as origin: unit direction u, the
+    // start's coordinates across (corner_i × u) and along (corner_i · u), and the length.
+    double ux[3], uy[3], across[3], along[3], length[3];
+};
+struct SlotBound {
+    Vec3 centroid;
+    double radius;
+};
+
+SlotTriangle makeSlot(const TriMesh& mesh, const TriangleFrame& f, std::uint32_t t)
+{
+    SlotTriangle s;
+    for (int i = 0; i < 3; ++i) s.corner[i] = mesh.points[mesh.triangles[t][i]];
+    s.n = f.n;
+    s.area = f.area;
+    s.t1 = f.t1;
+    s.t2 = f.t2;
+    double x[3], y[3];
+    for (int i = 0; i < 3; ++i) {
+        x[i] = dot(s.corner[i] - s.corner[0], f.t1);
+        y[i] = dot(s.corner[i] - s.corner[0], f.t2);
+    }
+    for (int i = 0; i < 3; ++i) {
+        const int k = (i + 1) % 3;
+        const double wx = x[k] - x[i], wy = y[k] - y[i];
+        s.length[i] = std::sqrt(wx * wx + wy * wy);
+        s.ux[i] = wx / s.length[i];
+        s.uy[i] = wy / s.length[i];
+        s.across[i] = x[i] * s.uy[i] - y[i] * s.ux[i];
+        s.along[i] = x[i] * s.ux[i] + y[i] * s.uy[i];
+    }
+    return s;
+}
+
+/// How many of the first n radii lie below a distance, from a table over the squared
+/// distance (a start that is never too high, and within a step or two) and a short walk.
+class RadiusCounter {
+public:
+    explicit RadiusCounter(const std::vector<double>& radii) : mRadii2(radii.size())
+    {
+        double gap = std::numeric_limits<double>::infinity(), previous = 0;
+        for (std::size_t j = 0; j < radii.size(); ++j) {
+            mRadii2[j] = radii[j] * radii[j];
+            gap = std::min(gap, mRadii2[j] - previous);
+            previous = mRadii2[j];
+        }
+        // Bins of half the smallest gap between squared radii, at most 2^16 of them.
+        const double bins = std::clamp(std::ceil(2 * mRadii2.back() / gap), 1.0, 65536.0);
+        mScale = bins / mRadii2.back();
+        mStart.resize(std::size_t(bins) + 2);
+        for (std::size_t b = 0; b < mStart.size(); ++b) {
+            const double x2 = double(b) / mScale * (1 - 1e-12);
+            mStart[b] = std::uint32_t(std::lower_bound(mRadii2.begin(), mRadii2.end(), x2) - mRadii2.begin());
+        }
+    }
+    /// count(r_j² < x2) over j < n.
+    std::size_t below(double x2, std::size_t n) const
+    {
+        std::size_t j = std::min<std::size_t>(start(x2), n);
+        while (j < n && mRadii2[j] < x2) ++j;
+        return j;
+    }
+    /// count(r_j² <= x2) over j < n.
+    std::size_t atMost(double x2, std::size_t n) const
+    {
+        std::size_t j = std::min<std::size_t>(start(x2), n);
+        while (j < n && mRadii2[j] <= x2) ++j;
+        return j;
+    }
+
+private:
+    std::uint32_t start(double x2) const
+    {
+        const double b = x2 * mScale;
+        return b < double(mStart.size() - 1) ? mStart[std::size_t(b)] : mStart.back();
+    }
+    std::vector<double> mRadii2;
+    std::vector<std::uint32_t> mStart;
+    double mScale = 1;
+};
+
+/// A triangle whose spheres about p it may straddle: its edges in its plane, origin c.
+struct Straddler {
+    double d = 0, near2 = 0;
+    double e[3], sigma[3], tA[3], tB[3], distance2[3];
+    bool inside = false, precise = true;  ///< c inside; fastMeasures() is accurate
+    /// Bounds |Σ σ sgn(d)(Δφ − Δψ)| / 2 over the line pieces, at any radius.
+    double lineSolidHalfBound = kPi;
+
+    Straddler(const SlotTriangle& s, double boundingRadius, const std::array<Vec3, 3>& q, const double q2[3],
+              int nearest)
+        : distance2{q2[0], q2[1], q2[2]}
+    {
+        // c relative to corner 0; LocalTriangle computes the corners' coordinates from p
+        // instead, so that they are exactly 0 at p, which matters only when c is near an
+        // edge's line, where this falls back to it anyway (precise).
+        const double x0 = dot(q[0], s.t1), y0 = dot(q[0], s.t2);
+        d = dot(q[nearest], s.n);
+        const double far2 = std::max({q2[0], q2[1], q2[2]});
+        int positive = 0;
+        double inPlane2 = std::numeric_limits<double>::infinity();
+        for (int i = 0; i < 3; ++i) {
+            const double h = x0 * s.uy[i] - y0 * s.ux[i] + s.across[i];
+            sigma[i] = h > 0 ? 1.0 : -1.0;
+            positive += h > 0;
+            e[i] = std::abs(h);
+            tA[i] = x0 * s.ux[i] + y0 * s.uy[i] + s.along[i];
+            tB[i] = tA[i] + s.length[i];
+            // The angles at c lose ~ 1e-16 far / e: keep e above 1e-4 of the corners' reach.
+            if (!(e[i] * e[i] > 1e-8 * far2)) precise = false;
+            const double along = tA[i] > 0 ? tA[i] : (tB[i] < 0 ? tB[i] : 0.0);
+            inPlane2 = std::min(inPlane2, e[i] * e[i] + along * along);
+        }
+        inside = positive == 3;  // counter-clockwise: c inside iff left of every edge
+        near2 = d * d + (inside ? 0.0 : inPlane2);
+        // From c outside, the triangle spans at most 2 asin(ρ_t / D) <= π ρ_t / D (D >= the
+        // distance from c to the triangle), and the line pieces at most twice that.
+        if (!inside && inPlane2 > 4 * boundingRadius * boundingRadius)
+            lineSolidHalfBound = kPi * boundingRadius / std::sqrt(inPlane2);
+    }
+
+    /// triangle ∩ B_r (module comment above); requires precise. When c is outside and the
+    /// line pieces' solid angle is small (lineSolidHalfBound < π/4), it is left out of the
+    /// result's solidAngle and returned as @p lineSolid, a complex number whose argument is
+    /// half of it, for the caller to sum as a product; otherwise @p lineSolid is 1.
+    Measures fastMeasures(double r, bool solid, Complex& lineSolid) const
+    {
+        lineSolid = Complex{};
+        Measures m;
+        const double ad = std::abs(d);
+        if (!(r > ad)) return m;
+        const double rho2 = (r - ad) * (r + ad), rho = std::sqrt(rho2);
+        const double sd = sign(d);
+        double lineArea = 0;
+        Complex angle, omega;
+        for (int i = 0; i < 3; ++i) {
+            if (e[i] >= rho) continue;
+            const double ts = std::sqrt((rho - e[i]) * (rho + e[i]));
+            const bool cutA = tA[i] < -ts, cutB = tB[i] > ts;
+            const double t1 = cutA ? -ts : tA[i], t2 = cutB ? ts : tB[i];
+            if (!(t2 > t1)) continue;
+            const double e2 = e[i] * e[i];
+            const double crossX = sigma[i] * e[i] * (t2 - t1), dotX = e2 + t1 * t2;  // X1 × X2, X1 · X2
+            lineArea += 0.5 * crossX;
+            angle.multiply(std::sqrt((e2 + t1 * t1) * (e2 + t2 * t2)) + dotX, crossX);
+            if (solid && d != 0) {
+                const double l1 = cutA ? r : std::sqrt(distance2[i]), l2 = cutB ? r : std::sqrt(distance2[(i + 1) % 3]);
+                // Van Oosterom for (c, X1, X2) seen from p, divided by |d|.
+                omega.multiply(l1 * l2 + ad * (l1 + l2) + dotX + d * d, sd * crossX);
+            }
+        }
+        double half = angle.arg();  // Σ σΔφ / 2
+        if (inside && half < -0.5 * kPi) half += 2 * kPi;
+        const double disc = (inside ? 2 * kPi : 0.0) - 2 * half;
+        m.area = 0.5 * rho2 * disc + lineArea;
+        m.arcLength = rho * disc;
+        if (solid && d != 0) {
+            m.solidAngle = (sd - d / r) * disc;
+            if (lineSolidHalfBound < 0.25 * kPi) {
+                const double scale = 1.0 / std::max(std::abs(omega.re), std::abs(omega.im));
+                lineSolid = {omega.re * scale, omega.im * scale};
+            } else {
+                double halfOmega = omega.arg();
+                if (inside && sd * halfOmega < -0.5 * kPi) halfOmega += sd * 2 * kPi;
+                m.solidAngle += 2 * halfOmega;
+            }
+        }
+        return m;
+    }
+};
+
+/// Per-radius sums of one vertex.
+class BallSums {
+public:
+    explicit BallSums(std::size_t numRadii)
+        : mArea(numRadii), mArc(numRadii), mOmega(numRadii), mDArea(numRadii), mWholeArea(numRadii),
+          mWholeOmega(numRadii), mWholeDArea(numRadii), mWhole(numRadii), mStraddled(numRadii)
+    {
+    }
+
+    void clear()
+    {
+        for (auto* v : {&mArea, &mArc, &mOmega, &mDArea, &mWholeArea, &mWholeOmega, &mWholeDArea})
+            std::fill(v->begin(), v->end(), 0.0);
+        std::fill(mWhole.begin(), mWhole.end(), AngleProduct{});
+        std::fill(mStraddled.begin(), mStraddled.end(), AngleProduct{});
+        mSumArea = mSumOmega = mSumDArea = 0;
+    }
+
+    void addStraddled(std::size_t j, const Measures& m, double d)
+    {
+        mArea[j] += m.area;
+        mArc[j] += m.arcLength;
+        mOmega[j] += m.solidAngle;
+        mDArea[j] += d * m.area;
+    }
+
+    /// A solid angle at radius j only, as a complex number whose argument is half of it
+    /// (bounded by @p halfBound < π/4).
+    void addStraddledSolid(std::size_t j, const Complex& half, double halfBound)
+    {
+        mStraddled[j].add(half, halfBound, mOmega[j]);
+    }
+
+    /// A triangle whole in B_r for radius j and beyond. @p halfBound bounds |Ω_t|/2.
+    void addWhole(std::size_t j, double area, double d, const Complex* solid, double halfBound)
+    {
+        mWholeArea[j] += area;
+        mWholeDArea[j] += d * area;
+        if (!solid) return;
+        if (halfBound >= 0.25 * kPi) {
+            mWholeOmega[j] += 2 * solid->arg();
+            return;
+        }
+        mWhole[j].add(*solid, halfBound, mWholeOmega[j]);
+    }
+
+    /// Totals at radius j (call with j = 0, 1, ... in order): area, arc, Σ Ω_t, Σ d_t area_t.
+    Measures total(std::size_t j, double& dArea)
+    {
+        mWhole[j].resolve(mWholeOmega[j]);
+        mStraddled[j].resolve(mOmega[j]);
+        mSumArea += mWholeArea[j];
+        mSumOmega += mWholeOmega[j];
+        mSumDArea += mWholeDArea[j];
+        dArea = mDArea[j] + mSumDArea;
+        Measures m;
+        m.area = mArea[j] + mSumArea;
+        m.arcLength = mArc[j];
+        m.solidAngle = mOmega[j] + mSumOmega;
+        return m;
+    }
+
+private:
+    /// A sum of angles kept as the product of complex numbers whose arguments are their
+    /// halves, resolved (one atan2) before the bounds of the halves reach π/2.
+    struct AngleProduct {
+        Complex product;
+        double budget = 0;
+        int factors = 0;
+        void add(const Complex& half, double halfBound, double& sum)
+        {
+            if (budget + halfBound >= 0.5 * kPi || factors == kMaxFactors) resolve(sum);
+            product.multiply(half.re, half.im);
+            budget += halfBound;
+            ++factors;
+        }
+        void resolve(double& sum)
+        {
+            if (factors > 0) sum += 2 * product.arg();
+            *this = AngleProduct{};
+        }
+    };
+    // Factors lie within ~[1, 4] in magnitude (vanOosterom() over la·lb·lc for a triangle
+    // that subtends little, and the line pieces' numbers over their larger part): 4^64 stays
+    // finite.
+    static constexpr int kMaxFactors = 64;
+
+    std::vector<double> mArea, mArc, mOmega, mDArea;          // straddled, per radius
+    std::vector<double> mWholeArea, mWholeOmega, mWholeDArea;  // whole, at their first radius
+    std::vector<AngleProduct> mWhole, mStraddled;
+    double mSumArea = 0, mSumOmega = 0, mSumDArea = 0;
 };
 
 void validate(const TriMesh& mesh, const ExactOptions& options)
@@ -414,11 +744,23 @@ ExactResult computeExact(const TriMesh& mesh, const ExactOptions& options, Progr
         }
     });
     const VertexFaces vf = wantVS ? vertexFaces(mesh) : VertexFaces{};
-    const TriangleGrid grid(mesh, 0.5 * radii.back());
+    const TriangleGrid grid(mesh, 0.25 * radii.back());
+    std::vector<SlotTriangle> slots(grid.size());
+    std::vector<SlotBound> bounds(grid.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots.size()), [&](const auto& range) {
+        for (std::size_t s = range.begin(); s < range.end(); ++s) {
+            const std::uint32_t t = grid.triangleAt(s);
+            slots[s] = makeSlot(mesh, frames[t], t);
+            bounds[s] = {frames[t].centroid, frames[t].boundingRadius};
+        }
+    });
+    const RadiusCounter counter(radii);
+    std::vector<double> radii2(nr);
+    for (std::size_t j = 0; j < nr; ++j) radii2[j] = radii[j] * radii[j];
 
     if (progress) progress->start("exact invariants", nk);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nk, 1), [&](const auto& range) {
-        std::vector<double> area(nr), arc(nr), omega(nr), dArea(nr);
+        BallSums sums(nr);
         for (std::size_t k = range.begin(); k < range.end(); ++k) {
             const std::uint32_t v = result.vertices[k];
             const Vec3& p = mesh.points[v];
@@ -429,50 +771,76 @@ ExactResult computeExact(const TriMesh& mesh, const ExactOptions& options, Progr
                                    radii.begin());
             if (jEnd == 0) continue;
             const double reach = radii[jEnd - 1];
-            std::fill(area.begin(), area.end(), 0.0);
-            std::fill(arc.begin(), arc.end(), 0.0);
-            std::fill(omega.begin(), omega.end(), 0.0);
-            std::fill(dArea.begin(), dArea.end(), 0.0);
+            sums.clear();
 
-            grid.forEachNear(p, reach, [&](std::uint32_t t) {
-                const double slack = reach + frames[t].boundingRadius;
-                if (squaredNorm(frames[t].centroid - p) >= slack * slack) return;
-                const auto& tri = mesh.triangles[t];
-                const LocalTriangle local(p, {mesh.points[tri[0]], mesh.points[tri[1]], mesh.points[tri[2]]},
-                                          frames[t]);
-                const double near = local.nearestDistance();
-                if (!(near < reach)) return;
-                const double d = local.distance();
-                std::size_t j = std::size_t(std::upper_bound(radii.begin(), radii.begin() + jEnd, near) -
-                                            radii.begin());
-                for (; j < jEnd && radii[j] < local.farthestDistance(); ++j) {
-                    const Measures m = local.sectors(radii[j], wantVS);
-                    area[j] += m.area;
-                    arc[j] += m.arcLength;
-                    omega[j] += m.solidAngle;
-                    dArea[j] += d * m.area;
-                }
-                if (j < jEnd) {
-                    const Measures m = local.whole(wantVS);
-                    for (; j < jEnd; ++j) {
-                        area[j] += m.area;
-                        omega[j] += m.solidAngle;
-                        dArea[j] += d * m.area;
+            grid.forEachNear(p, reach, [&](std::uint32_t slot) {
+                const SlotBound& bound = bounds[slot];
+                const double slack = reach + bound.radius;
+                const double centroid2 = squaredNorm(bound.centroid - p);
+                if (centroid2 >= slack * slack) return;
+                const SlotTriangle& tri = slots[slot];
+                const std::array<Vec3, 3> q{tri.corner[0] - p, tri.corner[1] - p, tri.corner[2] - p};
+                const double q2[3] = {squaredNorm(q[0]), squaredNorm(q[1]), squaredNorm(q[2])};
+                // The first radius whose ball holds the whole triangle.
+                const std::size_t jWhole = counter.below(std::max({q2[0], q2[1], q2[2]}), jEnd);
+                // Corner nearest to p (the first of equals), as in LocalTriangle.
+                const int nearest = q2[0] <= q2[1] ? (q2[0] <= q2[2] ? 0 : 2) : (q2[1] <= q2[2] ? 1 : 2);
+                double d;
+                // Straddled radii lie between the distances to the triangle and to its
+                // farthest corner. Most triangles straddle none, which shows without the
+                // distance to the triangle: for x = Σ λ_i corner_i in it, |x − p|² = Σ λ_i
+                // |corner_i − p|² − Σ λ_i |corner_i − x|² >= (nearest corner)² − ρ_t², as the
+                // weighted mean x minimises the last sum (<= its value about the centroid).
+                const double below = jWhole > 0 ? radii2[jWhole - 1] : 0.0;
+                if (jWhole > 0 && q2[nearest] - bound.radius * bound.radius < below) {
+                    const Straddler straddler(tri, bound.radius, q, q2, nearest);
+                    d = straddler.d;
+                    std::size_t j = counter.atMost(straddler.near2, jEnd);
+                    if (j < jWhole && !straddler.precise) {
+                        TriangleFrame frame;
+                        frame.n = tri.n;
+                        frame.t1 = tri.t1;
+                        frame.t2 = tri.t2;
+                        frame.area = tri.area;
+                        const LocalTriangle local(q, frame);
+                        for (; j < jWhole; ++j) sums.addStraddled(j, local.sectors(radii[j], wantVS), d);
                     }
+                    for (; j < jWhole; ++j) {
+                        Complex lineSolid;
+                        sums.addStraddled(j, straddler.fastMeasures(radii[j], wantVS, lineSolid), d);
+                        if (lineSolid.im != 0)
+                            sums.addStraddledSolid(j, lineSolid, straddler.lineSolidHalfBound);
+                    }
+                } else {
+                    d = dot(q[nearest], tri.n);
                 }
+                if (jWhole >= jEnd) return;
+                if (!wantVS || d == 0) {
+                    sums.addWhole(jWhole, tri.area, d, nullptr, 0);
+                    return;
+                }
+                const double la = std::sqrt(q2[0]), lb = std::sqrt(q2[1]), lc = std::sqrt(q2[2]);
+                Complex solid = vanOosterom(q, la, lb, lc);
+                const double scale = 1.0 / (la * lb * lc);
+                solid.re *= scale;
+                solid.im *= scale;
+                const double x = bound.radius * bound.radius / centroid2;
+                sums.addWhole(jWhole, tri.area, d, &solid, x < 1 ? kPi * x : kPi);
             });
 
             const double omegaP = wantVS ? coneSolidAngle(mesh, frames, vf, v) : 0.0;
             for (std::size_t j = 0; j < jEnd; ++j) {
+                double dArea = 0;
+                const Measures m = sums.total(j, dArea);
                 const double r = radii[j];
                 if (wantPL) {
-                    result.patch[j][k] = area[j] / (kPi * r * r);
-                    result.line[j][k] = arc[j] / (2 * kPi * r);
+                    result.patch[j][k] = m.area / (kPi * r * r);
+                    result.line[j][k] = m.arcLength / (2 * kPi * r);
                 }
                 if (wantVS) {
                     // S/r² = Ω_p − Σ Ω_t;  3V = Σ d_t area_t + r S  (module comment).
-                    const double s = (omegaP - omega[j]) * r * r;
-                    const double vol = (dArea[j] + r * s) / 3.0;
+                    const double s = (omegaP - m.solidAngle) * r * r;
+                    const double vol = (dArea + r * s) / 3.0;
                     result.sphere[j][k] = s / (4 * kPi * r * r);
                     result.volume[j][k] = vol / (4.0 / 3.0 * kPi * r * r * r);
                 }

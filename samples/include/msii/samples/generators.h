@@ -90,6 +90,10 @@ struct HeightFieldOptions {
     double spacing = 0.1;     ///< mean vertex spacing (see the file note), mm
     bool closed = false;      ///< closed slab instead of an open patch
     double thickness = 5.0;   ///< slab thickness below z = 0, mm (must exceed the depth of the top)
+    /// Closed slab: 0 = walls and bottom as fine as the top; > 0 = as many meshers make
+    /// them, a few long triangles: each wall zips the fine top border to bottom vertices
+    /// this far apart (mm), and the flat bottom is a fan around its centre.
+    double wallStep = 0.0;
     double relief = 1.0;      ///< Terrain: hill amplitude (standard deviation ~ relief / 2), mm
     double hillWidth = 2.5;   ///< Terrain: typical hill width (Gaussian sigma), mm
     double sag = 0.3;         ///< Tablet: drop of the convex face from its centre to the middle of the longer side, mm
