@@ -278,36 +278,37 @@ double coneSolidAngle(const TriMesh& mesh, const std::vector<TriangleFrame>& fra
 
 // ---------------------------------------------------------------------------------------
 // Uniform grid of triangles by centroid: a query box grown by the largest centroid-corner
-// distance finds every triangle that meets a ball.
+// distance finds every triangle that meets a ball. computeExact() keeps the triangles much
+// larger than a cell in a second grid, so that a few long triangles (a scan's walls and
+// bottom, a hole's fill) do not widen every query.
 
 class TriangleGrid {
 public:
-    TriangleGrid(const TriMesh& mesh, double cellSize)
+    /// A grid of @p triangles (indices into @p frames), sorted by cell.
+    TriangleGrid(const std::vector<TriangleFrame>& frames, const std::vector<std::uint32_t>& triangles,
+                 double cellSize)
     {
-        const std::size_t nt = mesh.numTriangles();
-        std::vector<Vec3> centroid(nt);
+        const std::size_t nt = triangles.size();
         Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
-        for (std::size_t t = 0; t < nt; ++t) {
-            const auto& tri = mesh.triangles[t];
-            const Vec3 &a = mesh.points[tri[0]], &b = mesh.points[tri[1]], &c = mesh.points[tri[2]];
-            centroid[t] = (a + b + c) / 3.0;
-            mReach = std::max({mReach, norm(a - centroid[t]), norm(b - centroid[t]),
-                               norm(c - centroid[t])});
+        for (const std::uint32_t t : triangles) {
+            mReach = std::max(mReach, frames[t].boundingRadius);
             for (int i = 0; i < 3; ++i) {
-                lo[i] = std::min(lo[i], centroid[t][i]);
-                hi[i] = std::max(hi[i], centroid[t][i]);
+                lo[i] = std::min(lo[i], frames[t].centroid[i]);
+                hi[i] = std::max(hi[i], frames[t].centroid[i]);
             }
         }
+        if (nt == 0) lo = hi = Vec3(0, 0, 0);
         mOrigin = lo;
         // At most ~1e6 cells per axis, so the packed keys cannot overflow.
         const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
         mCell = std::max({cellSize, extent * 1e-6, std::numeric_limits<double>::min()});
         for (int i = 0; i < 3; ++i) mCount[i] = std::int64_t(std::floor((hi[i] - lo[i]) / mCell)) + 1;
         std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(nt);
-        for (std::size_t t = 0; t < nt; ++t) {
+        for (std::size_t s = 0; s < nt; ++s) {
+            const Vec3& centroid = frames[triangles[s]].centroid;
             std::int64_t c[3];
-            for (int i = 0; i < 3; ++i) c[i] = clampIndex(i, (centroid[t][i] - mOrigin[i]) / mCell);
-            keyed[t] = {key(c[0], c[1], c[2]), std::uint32_t(t)};
+            for (int i = 0; i < 3; ++i) c[i] = clampIndex(i, (centroid[i] - mOrigin[i]) / mCell);
+            keyed[s] = {key(c[0], c[1], c[2]), triangles[s]};
         }
         std::sort(keyed.begin(), keyed.end());
         mTriangles.resize(nt);
@@ -744,16 +745,33 @@ ExactResult computeExact(const TriMesh& mesh, const ExactOptions& options, Progr
         }
     });
     const VertexFaces vf = wantVS ? vertexFaces(mesh) : VertexFaces{};
-    const TriangleGrid grid(mesh, 0.25 * radii.back());
-    std::vector<SlotTriangle> slots(grid.size());
-    std::vector<SlotBound> bounds(grid.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots.size()), [&](const auto& range) {
-        for (std::size_t s = range.begin(); s < range.end(); ++s) {
-            const std::uint32_t t = grid.triangleAt(s);
-            slots[s] = makeSlot(mesh, frames[t], t);
-            bounds[s] = {frames[t].centroid, frames[t].boundingRadius};
-        }
-    });
+    // Triangles in cell order, in two grids: those within a cell of their centroid, and the
+    // larger ones (module comment of TriangleGrid).
+    const double cell = 0.25 * radii.back();
+    std::vector<std::uint32_t> small, large;
+    for (std::uint32_t t = 0; t < frames.size(); ++t) (frames[t].boundingRadius <= cell ? small : large).push_back(t);
+    struct TriangleSet {
+        TriangleGrid grid;
+        std::vector<SlotTriangle> slots;
+        std::vector<SlotBound> bounds;
+    };
+    std::vector<TriangleSet> sets;
+    for (const auto* subset : {&small, &large}) {
+        if (subset->empty()) continue;
+        double largest = 0;
+        for (const std::uint32_t t : *subset) largest = std::max(largest, frames[t].boundingRadius);
+        TriangleSet set{TriangleGrid(frames, *subset, std::max(cell, largest)), {}, {}};
+        set.slots.resize(subset->size());
+        set.bounds.resize(subset->size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, subset->size()), [&](const auto& range) {
+            for (std::size_t s = range.begin(); s < range.end(); ++s) {
+                const std::uint32_t t = set.grid.triangleAt(s);
+                set.slots[s] = makeSlot(mesh, frames[t], t);
+                set.bounds[s] = {frames[t].centroid, frames[t].boundingRadius};
+            }
+        });
+        sets.push_back(std::move(set));
+    }
     const RadiusCounter counter(radii);
     std::vector<double> radii2(nr);
     for (std::size_t j = 0; j < nr; ++j) radii2[j] = radii[j] * radii[j];
@@ -773,26 +791,26 @@ ExactResult computeExact(const TriMesh& mesh, const ExactOptions& options, Progr
             const double reach = radii[jEnd - 1];
             sums.clear();
 
-            grid.forEachNear(p, reach, [&](std::uint32_t slot) {
-                const SlotBound& bound = bounds[slot];
+            for (const TriangleSet& set : sets) set.grid.forEachNear(p, reach, [&](std::uint32_t slot) {
+                const SlotBound& bound = set.bounds[slot];
                 const double slack = reach + bound.radius;
                 const double centroid2 = squaredNorm(bound.centroid - p);
                 if (centroid2 >= slack * slack) return;
-                const SlotTriangle& tri = slots[slot];
+                const SlotTriangle& tri = set.slots[slot];
                 const std::array<Vec3, 3> q{tri.corner[0] - p, tri.corner[1] - p, tri.corner[2] - p};
                 const double q2[3] = {squaredNorm(q[0]), squaredNorm(q[1]), squaredNorm(q[2])};
                 // The first radius whose ball holds the whole triangle.
                 const std::size_t jWhole = counter.below(std::max({q2[0], q2[1], q2[2]}), jEnd);
-                // Corner nearest to p (the first of equals), as in LocalTriangle.
-                const int nearest = q2[0] <= q2[1] ? (q2[0] <= q2[2] ? 0 : 2) : (q2[1] <= q2[2] ? 1 : 2);
                 double d;
                 // Straddled radii lie between the distances to the triangle and to its
                 // farthest corner. Most triangles straddle none, which shows without the
                 // distance to the triangle: for x = Σ λ_i corner_i in it, |x − p|² = Σ λ_i
                 // |corner_i − p|² − Σ λ_i |corner_i − x|² >= (nearest corner)² − ρ_t², as the
                 // weighted mean x minimises the last sum (<= its value about the centroid).
-                const double below = jWhole > 0 ? radii2[jWhole - 1] : 0.0;
-                if (jWhole > 0 && q2[nearest] - bound.radius * bound.radius < below) {
+                const double nearest2 = std::min({q2[0], q2[1], q2[2]});
+                if (jWhole > 0 && nearest2 - bound.radius * bound.radius < radii2[jWhole - 1]) {
+                    // Corner nearest to p (the first of equals), as in LocalTriangle.
+                    const int nearest = q2[0] <= q2[1] ? (q2[0] <= q2[2] ? 0 : 2) : (q2[1] <= q2[2] ? 1 : 2);
                     const Straddler straddler(tri, bound.radius, q, q2, nearest);
                     d = straddler.d;
                     std::size_t j = counter.atMost(straddler.near2, jEnd);
@@ -812,7 +830,9 @@ ExactResult computeExact(const TriMesh& mesh, const ExactOptions& options, Progr
                             sums.addStraddledSolid(j, lineSolid, straddler.lineSolidHalfBound);
                     }
                 } else {
-                    d = dot(q[nearest], tri.n);
+                    // A triangle at p has d = 0 exactly, and no solid angle (its part is Ω_p);
+                    // otherwise any corner gives d up to rounding.
+                    d = nearest2 == 0 ? 0.0 : dot(q[0], tri.n);
                 }
                 if (jWhole >= jEnd) return;
                 if (!wantVS || d == 0) {
@@ -821,10 +841,11 @@ ExactResult computeExact(const TriMesh& mesh, const ExactOptions& options, Progr
                 }
                 const double la = std::sqrt(q2[0]), lb = std::sqrt(q2[1]), lc = std::sqrt(q2[2]);
                 Complex solid = vanOosterom(q, la, lb, lc);
-                const double scale = 1.0 / (la * lb * lc);
+                const double lengths = la * lb * lc, inverse = 1.0 / (lengths * centroid2);
+                const double scale = inverse * centroid2;
                 solid.re *= scale;
                 solid.im *= scale;
-                const double x = bound.radius * bound.radius / centroid2;
+                const double x = bound.radius * bound.radius * lengths * inverse;  // ρ_t² / D²
                 sums.addWhole(jWhole, tri.area, d, &solid, x < 1 ? kPi * x : kPi);
             });
 
