@@ -7,8 +7,12 @@
 /// With --large-vertices it then runs the `msii-samples` and `msii` programs themselves on
 /// a streamed terrain of that size (issue 6), each in its own process so that its peak
 /// memory is its own, and prints their time, memory and time per vertex against the above.
+/// It also times the exact mode (--exact): on a block of the tablet's vertices, and on every
+/// vertex of a closed slab whose walls and bottom are a few long triangles.
 #include <msii/core/stopwatch.h>
 #include <msii/invariants/compute.h>
+#include <msii/invariants/exact.h>
+#include <msii/invariants/scales.h>
 #include <msii/io/feature_properties.h>
 #include <msii/io/feature_table.h>
 #include <msii/metrics/feature_metrics.h>
@@ -109,6 +113,14 @@ int main(int argc, char** argv)
     app.add_option("--large-budget", largeBudget, "--memory-budget of that run (default 8G)");
     app.add_option("--msii", msiiProgram, "the msii program (default: the one built with this benchmark)");
     app.add_option("--msii-samples", samplesProgram, "the msii-samples program (default: the one built with this benchmark)");
+    int exactVertices = 2000;
+    bool exactSlab = true;
+    app.add_option("--exact-vertices", exactVertices,
+                   "also time the exact mode (--exact) on this many consecutive vertices in the middle of the tablet "
+                   "(default 2000; 0: skip)");
+    app.add_option("--exact-slab", exactSlab,
+                   "also time the exact mode on every vertex of a closed 7 x 5 x 3 mm tablet slab with long wall and bottom "
+                   "triangles (39k vertices, same spacing, R and N; default true)");
     CLI11_PARSE(app, argc, argv);
 
     samples::HeightFieldOptions ho;
@@ -249,6 +261,46 @@ int main(int argc, char** argv)
         if (run + 1 == runs) lastMesh = std::move(mesh);
     }
     fs::remove_all(dir);
+
+    // The exact mode (V, S, P, L from the triangles): on a block of the tablet's vertices,
+    // and on every vertex of a closed slab with long wall and bottom triangles.
+    std::vector<double> exactSeconds, exactSlabSeconds;
+    std::size_t exactSlabVertices = 0;
+    const auto exactOptions = [&](std::size_t first, std::size_t count) {
+        ExactOptions eo;
+        eo.radii = equidistantRadii(radius, scales);
+        eo.computeVolumeSphere = has('V') || has('S');
+        eo.computePatchLine = has('P') || has('L');
+        for (std::size_t i = first; i < first + count; ++i) eo.vertices.push_back(std::uint32_t(i));
+        return eo;
+    };
+    TriMesh slab;
+    if (exactSlab) {
+        samples::HeightFieldOptions so;
+        so.kind = samples::HeightFieldKind::Tablet;
+        so.width = 7;
+        so.height = 5;
+        so.spacing = spacing;
+        so.closed = true;
+        so.thickness = 3;
+        so.wallStep = 1.5;
+        slab = samples::makeHeightField(so);
+        exactSlabVertices = slab.numVertices();
+    }
+    for (int run = 0; run < runs; ++run) {
+        if (exactVertices > 0) {
+            const std::size_t count = std::min<std::size_t>(std::size_t(exactVertices), lastMesh.numVertices());
+            const ExactOptions eo = exactOptions((lastMesh.numVertices() - count) / 2, count);
+            const Stopwatch t;
+            computeExact(lastMesh, eo);
+            exactSeconds.push_back(t.seconds());
+        }
+        if (exactSlab) {
+            const Stopwatch t;
+            computeExact(slab, exactOptions(0, slab.numVertices()));
+            exactSlabSeconds.push_back(t.seconds());
+        }
+    }
 
     // After compute: every metric over all computed features (4 × N with V,S,P,L) against a
     // vertex's vector, and 30 passes of each 1-ring filter on quality (issue 4's stages).
@@ -396,6 +448,17 @@ int main(int argc, char** argv)
              (tiledDiffering == 0 ? std::string("bit-identical") : std::to_string(tiledDiffering) + " values differ") + ")")
                 .c_str(),
             median(tiled), "%8.2f");
+    if (!exactSeconds.empty()) {
+        const std::size_t count = std::min<std::size_t>(std::size_t(exactVertices), nv);
+        row(("exact mode (--exact), " + std::to_string(count) + " vertices of the tablet").c_str(), median(exactSeconds),
+            "%8.2f");
+        row("exact mode, milliseconds per vertex", 1e3 * median(exactSeconds) / double(count), "%8.3f");
+    }
+    if (!exactSlabSeconds.empty()) {
+        row(("exact mode, 7 x 5 x 3 mm slab, long walls, all " + std::to_string(exactSlabVertices) + " vertices").c_str(),
+            median(exactSlabSeconds), "%8.2f");
+        row("the same, milliseconds per vertex", 1e3 * median(exactSlabSeconds) / double(exactSlabVertices), "%8.3f");
+    }
     const std::string features = std::to_string(table.dimension()) + " features";
     for (const MetricRow& m : metricRows)
         row(("metric " + m.name + ", " + features).c_str(), median(m.seconds), "%8.2f");
