@@ -60,6 +60,7 @@ enum Stream : std::uint64_t {
     kStreamWedges,
     kStreamNoise,
     kStreamHoles,
+    kStreamRoughness,
 };
 
 // ---------------------------------------------------------------------------------------
@@ -340,6 +341,10 @@ void validate(const HeightFieldOptions& o)
     requirePositive(o.spacing, "spacing");
     if (o.closed) requirePositive(o.thickness, "thickness");
     requireNonNegative(o.wallStep, "wall step");
+    requirePositive(o.anisotropy, "anisotropy");
+    if (!(o.densityVariation >= 1) || !std::isfinite(o.densityVariation))
+        throw InvalidInputError("sample mesh: density variation must be a finite number of at least 1.");
+    requireNonNegative(o.roughness, "roughness");
     if (o.kind == HeightFieldKind::Terrain) {
         if (!std::isfinite(o.relief)) throw InvalidInputError("sample mesh: relief must be finite.");
         requirePositive(o.hillWidth, "hill width");
@@ -768,13 +773,14 @@ namespace {
 bool sameOptions(const HeightFieldOptions& a, const HeightFieldOptions& b)
 {
     // Adding a field to HeightFieldOptions changes the size: compare it here too.
-    static_assert(sizeof(HeightFieldOptions) == 13 * sizeof(double) + 2 * sizeof(std::uint64_t),
+    static_assert(sizeof(HeightFieldOptions) == 16 * sizeof(double) + 2 * sizeof(std::uint64_t),
                   "update sameOptions for the new HeightFieldOptions field");
     return a.kind == b.kind && a.width == b.width && a.height == b.height && a.spacing == b.spacing &&
            a.closed == b.closed && a.thickness == b.thickness && a.wallStep == b.wallStep && a.relief == b.relief &&
            a.hillWidth == b.hillWidth && a.sag == b.sag && a.wedgeSize == b.wedgeSize &&
            a.wedgeDensity == b.wedgeDensity && a.wedgeMargin == b.wedgeMargin && a.noise == b.noise &&
-           a.seed == b.seed;
+           a.seed == b.seed && a.anisotropy == b.anisotropy && a.densityVariation == b.densityVariation &&
+           a.roughness == b.roughness;
 }
 
 } // namespace
@@ -808,18 +814,39 @@ double heightFieldValue(const HeightFieldOptions& options, double x, double y)
 struct HeightLattice {
     int nx = 1, ny = 1;
     double width = 1, height = 1, reach = 0;
+    double warp = 0;       ///< amplitude α of the density warp s + α sin(2πs) / (2π)
+    double roughness = 0;  ///< HeightFieldOptions::roughness
     std::uint64_t seed = 1;
     std::size_t rowLength = 2;
 
     explicit HeightLattice(const HeightFieldOptions& options)
-        : nx(latticeCells(options.width, options.spacing)), ny(latticeCells(options.height, options.spacing)),
-          width(options.width), height(options.height), seed(options.seed), rowLength(std::size_t(nx) + 1)
+        : nx(latticeCells(options.width, options.spacing * std::sqrt(options.anisotropy))),
+          ny(latticeCells(options.height, options.spacing / std::sqrt(options.anisotropy))), width(options.width),
+          height(options.height), roughness(options.roughness), seed(options.seed), rowLength(std::size_t(nx) + 1)
     {
         reach = kJitter * std::min(width / nx, height / ny);
+        // Spacing along each axis varies by (1 + α) / (1 − α) = sqrt(densityVariation).
+        const double ratio = std::sqrt(options.densityVariation);
+        warp = (ratio - 1) / (ratio + 1);
     }
     std::size_t numPoints() const { return rowLength * (std::size_t(ny) + 1); }
     std::uint32_t index(int i, int j) const { return std::uint32_t(std::size_t(j) * rowLength + std::size_t(i)); }
     std::array<double, 2> xy(int i, int j, std::uint64_t stream) const
+    {
+        const auto p = jittered(i, j, stream);
+        if (warp == 0) return p;
+        return {width * warped(p[0] / width), height * warped(p[1] / height)};
+    }
+    /// The top's z at lattice vertex (i, j), at (x, y) = xy(i, j, kStreamJitter).
+    template <class Height> double z(const Height& h, int i, int j, double x, double y) const
+    {
+        const double value = h(x, y);
+        if (roughness == 0) return value;
+        return value + roughness * signedUnit(hashKey(seed, kStreamRoughness, std::uint64_t(j) * rowLength + std::uint64_t(i)));
+    }
+
+private:
+    std::array<double, 2> jittered(int i, int j, std::uint64_t stream) const
     {
         double x = latticeCoord(i, nx, width), y = latticeCoord(j, ny, height);
         const bool borderX = i == 0 || i == nx, borderY = j == 0 || j == ny;
@@ -829,6 +856,12 @@ struct HeightLattice {
         if (borderY) return {x + reach * signedUnit(h), y};
         const auto d = unitDiscPoint(h);
         return {x + reach * d[0], y + reach * d[1]};
+    }
+    /// Monotone on [0, 1] with fixed ends (the outline stays the rectangle).
+    double warped(double s) const
+    {
+        if (s <= 0 || s >= 1) return s;
+        return s + warp * std::sin(2 * kPi * s) / (2 * kPi);
     }
 };
 
@@ -912,7 +945,7 @@ TriMesh makeHeightField(const HeightFieldOptions& options)
         for (int j = rows.begin(); j != rows.end(); ++j)
             for (int i = 0; i <= nx; ++i) {
                 const auto xy = latticeXY(i, j, kStreamJitter);
-                mesh.points[std::size_t(j) * rowLength + std::size_t(i)] = {xy[0], xy[1], height(xy[0], xy[1])};
+                mesh.points[std::size_t(j) * rowLength + std::size_t(i)] = {xy[0], xy[1], lattice.z(height, i, j, xy[0], xy[1])};
             }
     });
     const std::size_t numTopTriangles = 2 * std::size_t(nx) * std::size_t(ny);
@@ -1037,7 +1070,7 @@ StreamedMeshCounts writeHeightFieldPly(const HeightFieldOptions& options, const 
             for (int j = r.begin(); j != r.end(); ++j)
                 for (int i = 0; i <= nx; ++i) {
                     const auto xy = lattice.xy(i, j, kStreamJitter);
-                    points[std::size_t(j - j0) * rowLength + std::size_t(i)] = {xy[0], xy[1], height(xy[0], xy[1])};
+                    points[std::size_t(j - j0) * rowLength + std::size_t(i)] = {xy[0], xy[1], lattice.z(height, i, j, xy[0], xy[1])};
                 }
         });
         // Vertex records of rows [j0, j1), and of the last row with the last band.

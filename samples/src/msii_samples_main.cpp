@@ -114,7 +114,13 @@ int main(int argc, char** argv)
     auto* optHeight = app.add_option("--height", height, "plane/terrain/tablet: extent along y, mm (default 15)");
     auto* optClosed = app.add_flag("--closed", closed, "plane/terrain/tablet: closed slab instead of an open patch");
     auto* optThickness = app.add_option("--thickness", thickness, "slab thickness below z = 0, mm (default 5)");
-    double wallStep = 0;
+    double wallStep = 0, anisotropy = 1, densityVariation = 1, roughness = 0;
+    auto* optAnisotropy = app.add_option("--anisotropy", anisotropy,
+                                         "plane/terrain/tablet: triangles this many times longer along x than y (default 1)");
+    auto* optDensity = app.add_option("--density-variation", densityVariation,
+                                      "plane/terrain/tablet: densest / sparsest vertex density, varying smoothly (default 1)");
+    auto* optRoughness = app.add_option("--roughness", roughness,
+                                        "plane/terrain/tablet: white scanner noise, z moved by up to this, mm (default 0)");
     auto* optWallStep = app.add_option("--wall-step", wallStep,
                                        "with --closed: walls and bottom of a few long triangles, bottom outline vertices "
                                        "this far apart, mm (as many meshers make them; default: as fine as the top)");
@@ -159,6 +165,9 @@ int main(int argc, char** argv)
             {optClosed, {"plane", "terrain", "tablet"}},
             {optThickness, {"plane", "terrain", "tablet"}},
             {optWallStep, {"plane", "terrain", "tablet"}},
+            {optAnisotropy, {"plane", "terrain", "tablet"}},
+            {optDensity, {"plane", "terrain", "tablet"}},
+            {optRoughness, {"plane", "terrain", "tablet"}},
             {optRelief, {"terrain"}},
             {optNoise, {"terrain", "tablet"}},
             {optWedgeSize, {"tablet"}},
@@ -200,6 +209,9 @@ int main(int argc, char** argv)
             if (optHeight->count()) o.height = height;
             if (optThickness->count()) o.thickness = thickness;
             o.wallStep = wallStep;
+            o.anisotropy = anisotropy;
+            o.densityVariation = densityVariation;
+            o.roughness = roughness;
             if (optRelief->count()) o.relief = relief;
             if (optNoise->count()) o.noise = noise;
             if (optWedgeSize->count()) o.wedgeSize = wedgeSize;
@@ -209,6 +221,9 @@ int main(int argc, char** argv)
             comment << " width " << o.width << " height " << o.height << " spacing " << o.spacing;
             if (o.closed) comment << " closed thickness " << o.thickness;
             if (o.wallStep > 0) comment << " wall step " << o.wallStep;
+            if (o.anisotropy != 1) comment << " anisotropy " << o.anisotropy;
+            if (o.densityVariation != 1) comment << " density variation " << o.densityVariation;
+            if (o.roughness > 0) comment << " roughness " << o.roughness;
             if (!o.closed && !ascii && holes == 0) {
                 // Streamed: never held in memory, so any size the disk takes.
                 msii::WritePlyOptions plyOptions;

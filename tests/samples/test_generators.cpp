@@ -611,6 +611,65 @@ TEST(SampleDeterminism, GoldenFingerprints)
         EXPECT_EQ(fingerprint(meshes[i]), expected[i]) << "sample " << i << ": 0x" << std::hex << fingerprint(meshes[i]);
 }
 
+// Scan-like sampling: the same surface, sampled as scanners and meshers do. Checked: the
+// triangles' aspect along x and y, the vertex density across the patch, the white noise's
+// amplitude against the height field, and a valid closed slab with long walls around it.
+TEST(SampleHeightField, ScanLikeSamplingHasTheAskedProperties)
+{
+    HeightFieldOptions o = heightField(HeightFieldKind::Terrain);
+    o.width = 12.0;
+    o.height = 12.0;
+    o.spacing = 0.1;
+    o.anisotropy = 3;
+    o.densityVariation = 4;
+    o.roughness = 0.01;
+    const TriMesh mesh = makeHeightField(o);
+    // Aspect: mean |dx| / mean |dy| of the lattice's row and column edges (index k + 1 and
+    // k + row; the first row is the border y = 0).
+    std::size_t row = 0;
+    while (mesh.points[row].y == 0) ++row;
+    double dx = 0, dy = 0;
+    std::size_t n = 0;
+    for (std::size_t k = row + 1; k + row + 1 < mesh.numVertices(); k += 37) {
+        if (k % row == row - 1) continue;  // the row's last vertex
+        dx += std::abs(mesh.points[k + 1].x - mesh.points[k].x);
+        dy += std::abs(mesh.points[k + row].y - mesh.points[k].y);
+        ++n;
+    }
+    ASSERT_GT(n, 100u);
+    EXPECT_NEAR(dx / dy, 3.0, 0.3);
+    // Density: x = W F(u / W), F(s) = s + α sin(2πs) / (2π), α = 1/3, spaces the columns
+    // F'(0) / F'(1/2) = (1 + α) / (1 − α) = 2 times wider at the border than in the middle
+    // (the same along y: 4 : 1 in vertices per area).
+    const auto meanColumnGap = [&](double a, double b) {
+        double sum = 0;
+        std::size_t count = 0;
+        for (std::size_t k = row + 1; k + 1 < mesh.numVertices(); ++k)
+            if (k % row != row - 1 && mesh.points[k].x >= a && mesh.points[k].x < b) {
+                sum += mesh.points[k + 1].x - mesh.points[k].x;
+                ++count;
+            }
+        return sum / double(count);
+    };
+    EXPECT_NEAR(meanColumnGap(0, 0.4) / meanColumnGap(5.8, 6.2), 2.0, 0.15);
+    // Noise: |z − h| up to the roughness, spread over it (not smooth, not zero).
+    double largest = 0, sum = 0;
+    for (const Vec3& p : mesh.points) {
+        const double d = std::abs(p.z - heightFieldValue(o, p.x, p.y));
+        largest = std::max(largest, d);
+        sum += d;
+    }
+    EXPECT_LE(largest, 0.01);
+    EXPECT_GT(largest, 0.009);
+    EXPECT_NEAR(sum / double(mesh.numVertices()), 0.005, 0.0005);
+    o.closed = true;
+    o.thickness = 3;
+    o.wallStep = 1.5;
+    const TriMesh slab = makeHeightField(o);
+    expectWatertight(slab, "scan-like slab with long walls");
+    EXPECT_GT(signedVolume(slab), 0.0);
+}
+
 // ---------------------------------------------------------------------------------------
 // Invalid options
 // ---------------------------------------------------------------------------------------

@@ -102,6 +102,18 @@ struct HeightFieldOptions {
     double wedgeMargin = 1.0; ///< Tablet: wedge-free band along the border, mm
     double noise = 0.002;     ///< Tablet/Terrain: amplitude of smooth scanner-like noise (wavelength 5 spacings), mm
     std::uint64_t seed = 1;
+    /// Scan-like sampling (the surface stays the same; where and how densely it is sampled
+    /// changes), for meshes like those scanners and meshers make:
+    /// - anisotropy: lattice cells this many times longer along x than along y (triangles
+    ///   of aspect ~ anisotropy), at the same mean density;
+    /// - densityVariation: the densest part has this many times the vertex density of the
+    ///   sparsest, varying smoothly across the surface (a sine warp of x and of y, dense in
+    ///   the middle, sparse at the border);
+    /// - roughness: white scanner noise, every top vertex moved in z by a seeded uniform
+    ///   value in [-roughness, roughness], mm (then z differs from heightFieldValue()).
+    double anisotropy = 1.0;
+    double densityVariation = 1.0;
+    double roughness = 0.0;
 };
 /// @throw InvalidInputError if a size is not positive and finite, a closed slab's
 ///        thickness does not reach below the lowest top point, or the mesh would exceed
