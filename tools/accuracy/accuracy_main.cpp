@@ -56,9 +56,17 @@ struct Row {
     std::size_t vertices = 0, compared = 0, maskedFastOnly = 0, maskedExactOnly = 0;
     double edgesPerRadius = 0, fastSeconds = 0;
     Difference all[4], largest[4];  // V, S, P, L
+    struct Worst {
+        double difference;
+        int invariant;
+        std::size_t radius;
+        std::uint32_t vertex;
+        float fast, exact;
+    };
+    std::vector<Worst> worst;  // the largest differences, largest first
 };
 
-Row measure(const Case& c, int scales, std::size_t numVertices, std::uint64_t seed)
+Row measure(const Case& c, int scales, std::size_t numVertices, std::uint64_t seed, std::size_t keepWorst)
 {
     Row row;
     row.name = c.name;
@@ -100,6 +108,13 @@ Row measure(const Case& c, int scales, std::size_t numVertices, std::uint64_t se
                 const float f = (*columns[i][0])[j][v], e = (*columns[i][1])[j][v];
                 row.all[i].add(f, e);
                 if (j + 1 == radii.size()) row.largest[i].add(f, e);
+                const double d = std::abs(double(f) - double(e));
+                if (keepWorst > 0 && d == d) {
+                    row.worst.push_back({d, i, j, v, f, e});
+                    std::sort(row.worst.begin(), row.worst.end(),
+                              [](const Row::Worst& a, const Row::Worst& b) { return a.difference > b.difference; });
+                    if (row.worst.size() > keepWorst) row.worst.pop_back();
+                }
             }
     }
     row.compared = row.all[0].count + row.all[1].count + row.all[2].count + row.all[3].count;
@@ -159,6 +174,8 @@ int main(int argc, char** argv)
     int scales = 16;
     std::size_t vertices = 200;
     std::uint64_t seed = 1;
+    std::size_t worst = 0;
+    app.add_option("--worst", worst, "also list the K largest differences (vertex of the prepared mesh, radius index)");
     app.add_option("meshes", files, "meshes to measure (PLY, OBJ, OFF, STL); default: the generated set");
     app.add_option("-r,--radius", radius, "largest radius R for the given meshes (mesh units)");
     app.add_option("-n,--scales", scales, "N (default 16)");
@@ -183,7 +200,7 @@ int main(int argc, char** argv)
         std::printf("| mesh | vertices | R / median edge | V̂ | Ŝ | P̂ | L̂ | V̂ at R | Ŝ at R |\n");
         std::printf("|---|---|---|---|---|---|---|---|---|\n");
         for (const Case& c : cases) {
-            const Row r = measure(c, scales, vertices, seed);
+            const Row r = measure(c, scales, vertices, seed, worst);
             const auto pair = [](const Difference& d) {
                 char text[48];
                 std::snprintf(text, sizeof(text), "%.1e / %.1e", d.mean(), d.max);
@@ -196,6 +213,9 @@ int main(int argc, char** argv)
                 std::printf("|   near borders: %zu values masked by the fast mode only (its grid reaches a little "
                             "beyond r), %zu by the exact mode only | | | | | | | | |\n",
                             r.maskedFastOnly, r.maskedExactOnly);
+            for (const Row::Worst& w : r.worst)
+                std::printf("|   %c at r_%zu, vertex %u: fast %.4f, exact %.4f | | | | | | | | |\n", "VSPL"[w.invariant],
+                            w.radius + 1, w.vertex, double(w.fast), double(w.exact));
             std::fflush(stdout);
         }
     } catch (const std::exception& e) {

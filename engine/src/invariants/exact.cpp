@@ -246,7 +246,8 @@ VertexFaces vertexFaces(const TriMesh& mesh)
 /// spherical polygon with a geodesic side per incident triangle and a corner per incident
 /// edge e, where its interior angle is the solid's interior dihedral angle δ_e at e (π flat,
 /// < π convex, > π concave). Girard: Ω = Σ_e δ_e − (k − 2)π over the k edges (flat 2π,
-/// convex cube corner π/2). NaN if an edge at v has no second triangle (border).
+/// convex cube corner π/2). NaN if an edge at v has no second triangle (border), or if the
+/// triangles at v fold over one another.
 double coneSolidAngle(const TriMesh& mesh, const std::vector<TriangleFrame>& frames,
                       const VertexFaces& vf, std::uint32_t v)
 {
@@ -273,7 +274,11 @@ double coneSolidAngle(const TriMesh& mesh, const std::vector<TriangleFrame>& fra
         // The normals turn by θ about e (positive: convex fold); δ = π − θ.
         sum += kPi - std::atan2(dot(cross(n1, n2), e), dot(n1, n2));
     }
-    return sum - double(k - 2) * kPi;
+    // A cone is a simple closed curve on the unit sphere, enclosing 0 < Ω < 4π. Outside
+    // that range the triangles at v fold over one another (a crumpled patch of a scan), the
+    // curve crosses itself and the solid is not defined at v: NaN.
+    const double omega = sum - double(k - 2) * kPi;
+    return omega > 0 && omega < 4 * kPi ? omega : kNaN;
 }
 
 // ---------------------------------------------------------------------------------------

@@ -53,8 +53,10 @@ struct ExactResult {
     std::vector<std::uint32_t> vertices;  ///< the vertices evaluated (all if none were given)
     /// [radius j][k] for vertex vertices[k], normalised: V/(4/3 π r³), S/(4π r²) (plane 0.5),
     /// P/(π r²), L/(2π r) (plane 1). NaN where masked (the ball reaches a border) and for
-    /// V and S at a vertex whose cone is undefined (on a border when no borderDistance is
-    /// given, or in no triangle). Empty if not asked for.
+    /// V and S at a vertex whose cone is undefined: on a border when no borderDistance is
+    /// given, in no triangle, or where its triangles fold over one another (the cone's
+    /// solid angle by Girard's theorem falls outside (0, 4π): a crumpled patch of a scan,
+    /// where the solid is not defined). Empty if not asked for.
     std::vector<std::vector<double>> volume, sphere, patch, line;
 };
 
