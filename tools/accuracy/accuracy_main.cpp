@@ -66,7 +66,8 @@ struct Row {
     std::vector<Worst> worst;  // the largest differences, largest first
 };
 
-Row measure(const Case& c, int scales, std::size_t numVertices, std::uint64_t seed, std::size_t keepWorst)
+Row measure(const Case& c, const ComputeOptions& settings, std::size_t numVertices, std::uint64_t seed,
+            std::size_t keepWorst)
 {
     Row row;
     row.name = c.name;
@@ -75,9 +76,9 @@ Row measure(const Case& c, int scales, std::size_t numVertices, std::uint64_t se
     po.radius = c.radius;
     const TriMesh mesh = prepareMesh(c.mesh, po).mesh;
     row.vertices = mesh.numVertices();
-    ComputeOptions o;
+    ComputeOptions o = settings;
     o.radius = c.radius;
-    o.scales = scales;
+    const int scales = o.scales;
     const Stopwatch fastTime;
     const ComputeResult fast = computeInvariants(mesh, o);
     row.fastSeconds = fastTime.seconds();
@@ -175,6 +176,9 @@ int main(int argc, char** argv)
     std::size_t vertices = 200;
     std::uint64_t seed = 1;
     std::size_t worst = 0;
+    ComputeOptions settings;
+    app.add_option("--precision", settings.minVoxelsPerRadius, "as msii compute --precision (default 6)");
+    app.add_option("--pl-precision", settings.patchLinePrecision, "as msii compute --pl-precision (default: 4/3 of --precision)");
     app.add_option("--worst", worst, "also list the K largest differences (vertex of the prepared mesh, radius index)");
     app.add_option("meshes", files, "meshes to measure (PLY, OBJ, OFF, STL); default: the generated set");
     app.add_option("-r,--radius", radius, "largest radius R for the given meshes (mesh units)");
@@ -200,7 +204,8 @@ int main(int argc, char** argv)
         std::printf("| mesh | vertices | R / median edge | V̂ | Ŝ | P̂ | L̂ | V̂ at R | Ŝ at R |\n");
         std::printf("|---|---|---|---|---|---|---|---|---|\n");
         for (const Case& c : cases) {
-            const Row r = measure(c, scales, vertices, seed, worst);
+            settings.scales = scales;
+            const Row r = measure(c, settings, vertices, seed, worst);
             const auto pair = [](const Difference& d) {
                 char text[48];
                 std::snprintf(text, sizeof(text), "%.1e / %.1e", d.mean(), d.max);

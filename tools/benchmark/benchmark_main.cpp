@@ -97,7 +97,7 @@ int main(int argc, char** argv)
     app.add_option("--radius", radius, "largest radius R, mm (default 1)");
     app.add_option("--scales", scales, "N (default 16)");
     app.add_option("--precision", precision, "voxels per radius (default 6)");
-    app.add_option("--pl-precision", plPrecision, "cells per radius for P and L (default: as --precision)");
+    app.add_option("--pl-precision", plPrecision, "cells per radius for P and L (default: 4/3 of --precision)");
     app.add_option("--voxel-size", voxel, "finest voxel (default automatic)");
     app.add_option("--runs", runs, "runs; medians are reported (default 3)");
     app.add_option("--invariants", invariants, "which invariants, e.g. V,S (default V,S,P,L)");
@@ -415,7 +415,13 @@ int main(int argc, char** argv)
     std::printf("msii-benchmark: tablet %.1f x %.1f mm, spacing %.3f mm, %zu vertices, R = %g, N = %d, "
                 "%s, precision %g (P, L: %g), voxel %.4f mm, %d levels, %d runs (medians)\n",
                 size, size, spacing, nv, radius, scales, invariants.c_str(), precision,
-                plPrecision > 0 ? plPrecision : precision, last.voxelSize,
+                [&] {
+                    ComputeOptions o;
+                    o.minVoxelsPerRadius = precision;
+                    o.patchLinePrecision = plPrecision;
+                    return patchLinePrecision(o);
+                }(),
+                last.voxelSize,
                 last.invariants.numLevels, runs);
     std::printf("machine: %s, %u hardware threads\n\n", cpuModel().c_str(), std::thread::hardware_concurrency());
     std::printf("| %-62s | %8s |\n|%s|%s|\n", "stage", "seconds", std::string(64, '-').c_str(), std::string(10, '-').c_str());

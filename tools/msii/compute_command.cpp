@@ -63,6 +63,15 @@ struct ComputeArgs {
     bool recursive = false;     // folders: also their subfolders
 };
 
+/// The P and L precision the engine uses for these arguments (0 = its automatic choice).
+double plPrecisionOf(const ComputeArgs& args)
+{
+    ComputeOptions o;
+    o.minVoxelsPerRadius = args.precision;
+    o.patchLinePrecision = args.plPrecision;
+    return patchLinePrecision(o);
+}
+
 /// What one input gave, for the summary and the manifest.
 struct OneResult {
     std::size_t vertices = 0;
@@ -428,7 +437,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                        {"voxel_size", result.voxelSize},
                        {"voxel_size_requested", args.voxelSize},
                        {"precision_voxels_per_radius", args.precision},
-                       {"precision_patch_line", args.plPrecision > 0 ? args.plPrecision : args.precision},
+                       {"precision_patch_line", plPrecisionOf(args)},
                        {"levels", inv.numLevels},
                        {"level_of_radius", inv.levelOfRadius},
                        {"band_half_width_voxels", result.bandHalfWidth},
@@ -577,8 +586,7 @@ std::string differentParameters(const std::string& sidecar, const ComputeArgs& a
         check("radius", p.at("radius").get<double>(), args.radius);
         check("scales", p.at("scales").get<double>(), args.scales);
         check("precision", p.at("precision_voxels_per_radius").get<double>(), args.precision);
-        const double plPrecision = args.plPrecision > 0 ? args.plPrecision : args.precision;
-        check("P and L precision", p.value("precision_patch_line", args.precision), plPrecision);
+        check("P and L precision", p.value("precision_patch_line", args.precision), plPrecisionOf(args));
         check("voxel size", p.at("voxel_size_requested").get<double>(), args.voxelSize);
         if ((p.at("mode").get<std::string>() == "exact") != args.exact) differs += (differs.empty() ? "" : ", ") + std::string("mode");
         std::string had;
@@ -678,8 +686,8 @@ std::function<int()> addComputeCommand(CLI::App& app)
                     "Voxels per radius on the grid each radius is computed on (default 6; "
                     "higher = more exact and slower)");
     cmd->add_option("--pl-precision", args->plPrecision,
-                    "The same for P and L alone (default: as --precision; 12 halves their kernel blur "
-                    "at about twice their time)")
+                    "The same for P and L alone (default: 4/3 of --precision, 8 at the default 6; "
+                    "twice that halves their kernel blur at about twice their time)")
         // Given, it must be a precision: 0 (the engine's "as V and S") is not one.
         ->check([](const std::string& text) -> std::string {
             char* end = nullptr;
