@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <limits>
 #include <sstream>
+#include <unordered_set>
 #include <utility>
 
 namespace msii {
@@ -753,8 +754,29 @@ ExactResult computeExact(const TriMesh& mesh, const ExactOptions& options, Progr
     // Triangles in cell order, in two grids: those within a cell of their centroid, and the
     // larger ones (module comment of TriangleGrid).
     const double cell = 0.25 * radii.back();
+    // With a few chosen vertices of a large mesh, only the triangles that may meet their
+    // balls: a triangle no larger than R whose centroid lies within 2 R of a vertex, found
+    // through cells of size R around the vertices (a hash of the cell; a collision only
+    // keeps a triangle more).
+    const double R = radii.back();
+    std::unordered_set<std::uint64_t> near;
+    const auto cellKey = [R](const Vec3& x, int dx, int dy, int dz) {
+        const auto index = [R](double c, int d) { return std::uint64_t(std::int64_t(std::floor(c / R)) + d); };
+        return index(x.x, dx) * 0x9E3779B97F4A7C15ULL ^ index(x.y, dy) * 0xC2B2AE3D27D4EB4FULL ^
+               index(x.z, dz) * 0x165667B19E3779F9ULL;
+    };
+    const bool someVertices = 4 * nk < mesh.numVertices();
+    if (someVertices)
+        for (const std::uint32_t v : result.vertices)
+            for (int dx = -2; dx <= 2; ++dx)
+                for (int dy = -2; dy <= 2; ++dy)
+                    for (int dz = -2; dz <= 2; ++dz) near.insert(cellKey(mesh.points[v], dx, dy, dz));
     std::vector<std::uint32_t> small, large;
-    for (std::uint32_t t = 0; t < frames.size(); ++t) (frames[t].boundingRadius <= cell ? small : large).push_back(t);
+    for (std::uint32_t t = 0; t < frames.size(); ++t) {
+        if (someVertices && frames[t].boundingRadius <= R && near.count(cellKey(frames[t].centroid, 0, 0, 0)) == 0)
+            continue;
+        (frames[t].boundingRadius <= cell ? small : large).push_back(t);
+    }
     struct TriangleSet {
         TriangleGrid grid;
         std::vector<SlotTriangle> slots;
