@@ -90,8 +90,7 @@ ComputeResult prepareComputation(const TriMesh& mesh, const ComputeOptions& opti
 
 double patchLinePrecision(const ComputeOptions& options)
 {
-    return options.patchLinePrecision > 0 ? options.patchLinePrecision
-                                          : std::min(64.0, 4.0 / 3.0 * options.minVoxelsPerRadius);
+    return options.patchLinePrecision > 0 ? options.patchLinePrecision : options.minVoxelsPerRadius;
 }
 
 double coarsestPrecision(const ComputeOptions& options)
