@@ -473,6 +473,7 @@ public:
             mStart[b] = std::uint32_t(std::lower_bound(mRadii2.begin(), mRadii2.end(), x2) - mRadii2.begin());
         }
     }
+    double squared(std::size_t j) const { return mRadii2[j]; }  ///< r_j²
     /// count(r_j² < x2) over j < n.
     std::size_t below(double x2, std::size_t n) const
     {
@@ -504,11 +505,8 @@ struct Straddler {
     double d = 0, near2 = 0;
     double e[3], sigma[3], tA[3], tB[3], distance2[3];
     bool inside = false, precise = true;  ///< c inside; fastMeasures() is accurate
-    /// Bounds |Σ σ sgn(d)(Δφ − Δψ)| / 2 over the line pieces, at any radius.
-    double lineSolidHalfBound = kPi;
 
-    Straddler(const SlotTriangle& s, double boundingRadius, const std::array<Vec3, 3>& q, const double q2[3],
-              int nearest)
+    Straddler(const SlotTriangle& s, const std::array<Vec3, 3>& q, const double q2[3], int nearest)
         : distance2{q2[0], q2[1], q2[2]}
     {
         // c relative to corner 0; LocalTriangle computes the corners' coordinates from p
@@ -533,19 +531,11 @@ struct Straddler {
         }
         inside = positive == 3;  // counter-clockwise: c inside iff left of every edge
         near2 = d * d + (inside ? 0.0 : inPlane2);
-        // From c outside, the triangle spans at most 2 asin(ρ_t / D) <= π ρ_t / D (D >= the
-        // distance from c to the triangle), and the line pieces at most twice that.
-        if (!inside && inPlane2 > 4 * boundingRadius * boundingRadius)
-            lineSolidHalfBound = kPi * boundingRadius / std::sqrt(inPlane2);
     }
 
-    /// triangle ∩ B_r (module comment above); requires precise. When c is outside and the
-    /// line pieces' solid angle is small (lineSolidHalfBound < π/4), it is left out of the
-    /// result's solidAngle and returned as @p lineSolid, a complex number whose argument is
-    /// half of it, for the caller to sum as a product; otherwise @p lineSolid is 1.
-    Measures fastMeasures(double r, bool solid, Complex& lineSolid) const
+    /// triangle ∩ B_r (module comment above); requires precise.
+    Measures fastMeasures(double r, bool solid) const
     {
-        lineSolid = Complex{};
         Measures m;
         const double ad = std::abs(d);
         if (!(r > ad)) return m;
@@ -575,15 +565,9 @@ struct Straddler {
         m.area = 0.5 * rho2 * disc + lineArea;
         m.arcLength = rho * disc;
         if (solid && d != 0) {
-            m.solidAngle = (sd - d / r) * disc;
-            if (lineSolidHalfBound < 0.25 * kPi) {
-                const double scale = 1.0 / std::max(std::abs(omega.re), std::abs(omega.im));
-                lineSolid = {omega.re * scale, omega.im * scale};
-            } else {
-                double halfOmega = omega.arg();
-                if (inside && sd * halfOmega < -0.5 * kPi) halfOmega += sd * 2 * kPi;
-                m.solidAngle += 2 * halfOmega;
-            }
+            double halfOmega = omega.arg();
+            if (inside && sd * halfOmega < -0.5 * kPi) halfOmega += sd * 2 * kPi;
+            m.solidAngle = (sd - d / r) * disc + 2 * halfOmega;
         }
         return m;
     }
@@ -594,7 +578,7 @@ class BallSums {
 public:
     explicit BallSums(std::size_t numRadii)
         : mArea(numRadii), mArc(numRadii), mOmega(numRadii), mDArea(numRadii), mWholeArea(numRadii),
-          mWholeOmega(numRadii), mWholeDArea(numRadii), mWhole(numRadii), mStraddled(numRadii)
+          mWholeOmega(numRadii), mWholeDArea(numRadii), mWhole(numRadii)
     {
     }
 
@@ -603,7 +587,6 @@ public:
         for (auto* v : {&mArea, &mArc, &mOmega, &mDArea, &mWholeArea, &mWholeOmega, &mWholeDArea})
             std::fill(v->begin(), v->end(), 0.0);
         std::fill(mWhole.begin(), mWhole.end(), AngleProduct{});
-        std::fill(mStraddled.begin(), mStraddled.end(), AngleProduct{});
         mSumArea = mSumOmega = mSumDArea = 0;
     }
 
@@ -613,13 +596,6 @@ public:
         mArc[j] += m.arcLength;
         mOmega[j] += m.solidAngle;
         mDArea[j] += d * m.area;
-    }
-
-    /// A solid angle at radius j only, as a complex number whose argument is half of it
-    /// (bounded by @p halfBound < π/4).
-    void addStraddledSolid(std::size_t j, const Complex& half, double halfBound)
-    {
-        mStraddled[j].add(half, halfBound, mOmega[j]);
     }
 
     /// A triangle whole in B_r for radius j and beyond. @p halfBound bounds |Ω_t|/2.
@@ -639,7 +615,6 @@ public:
     Measures total(std::size_t j, double& dArea)
     {
         mWhole[j].resolve(mWholeOmega[j]);
-        mStraddled[j].resolve(mOmega[j]);
         mSumArea += mWholeArea[j];
         mSumOmega += mWholeOmega[j];
         mSumDArea += mWholeDArea[j];
@@ -671,14 +646,13 @@ private:
             *this = AngleProduct{};
         }
     };
-    // Factors lie within ~[1, 4] in magnitude (vanOosterom() over la·lb·lc for a triangle
-    // that subtends little, and the line pieces' numbers over their larger part): 4^64 stays
-    // finite.
+    // Factors lie within ~[1, 4] in magnitude (vanOosterom() over la·lb·lc, for a triangle
+    // that subtends little): 4^64 stays finite.
     static constexpr int kMaxFactors = 64;
 
     std::vector<double> mArea, mArc, mOmega, mDArea;          // straddled, per radius
     std::vector<double> mWholeArea, mWholeOmega, mWholeDArea;  // whole, at their first radius
-    std::vector<AngleProduct> mWhole, mStraddled;
+    std::vector<AngleProduct> mWhole;
     double mSumArea = 0, mSumOmega = 0, mSumDArea = 0;
 };
 
@@ -800,8 +774,6 @@ ExactResult computeExact(const TriMesh& mesh, const ExactOptions& options, Progr
         sets.push_back(std::move(set));
     }
     const RadiusCounter counter(radii);
-    std::vector<double> radii2(nr);
-    for (std::size_t j = 0; j < nr; ++j) radii2[j] = radii[j] * radii[j];
 
     if (progress) progress->start("exact invariants", nk);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nk, 1), [&](const auto& range) {
@@ -835,10 +807,10 @@ ExactResult computeExact(const TriMesh& mesh, const ExactOptions& options, Progr
                 // |corner_i − p|² − Σ λ_i |corner_i − x|² >= (nearest corner)² − ρ_t², as the
                 // weighted mean x minimises the last sum (<= its value about the centroid).
                 const double nearest2 = std::min({q2[0], q2[1], q2[2]});
-                if (jWhole > 0 && nearest2 - bound.radius * bound.radius < radii2[jWhole - 1]) {
+                if (jWhole > 0 && nearest2 - bound.radius * bound.radius < counter.squared(jWhole - 1)) {
                     // Corner nearest to p (the first of equals), as in LocalTriangle.
                     const int nearest = q2[0] <= q2[1] ? (q2[0] <= q2[2] ? 0 : 2) : (q2[1] <= q2[2] ? 1 : 2);
-                    const Straddler straddler(tri, bound.radius, q, q2, nearest);
+                    const Straddler straddler(tri, q, q2, nearest);
                     d = straddler.d;
                     std::size_t j = counter.atMost(straddler.near2, jEnd);
                     if (j < jWhole && !straddler.precise) {
@@ -850,12 +822,7 @@ ExactResult computeExact(const TriMesh& mesh, const ExactOptions& options, Progr
                         const LocalTriangle local(q, frame);
                         for (; j < jWhole; ++j) sums.addStraddled(j, local.sectors(radii[j], wantVS), d);
                     }
-                    for (; j < jWhole; ++j) {
-                        Complex lineSolid;
-                        sums.addStraddled(j, straddler.fastMeasures(radii[j], wantVS, lineSolid), d);
-                        if (lineSolid.im != 0)
-                            sums.addStraddledSolid(j, lineSolid, straddler.lineSolidHalfBound);
-                    }
+                    for (; j < jWhole; ++j) sums.addStraddled(j, straddler.fastMeasures(radii[j], wantVS), d);
                 } else {
                     // A triangle at p has d = 0 exactly, and no solid angle (its part is Ω_p);
                     // otherwise any corner gives d up to rounding.
