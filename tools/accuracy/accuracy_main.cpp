@@ -178,7 +178,7 @@ int main(int argc, char** argv)
     std::size_t worst = 0;
     ComputeOptions settings;
     app.add_option("--precision", settings.minVoxelsPerRadius, "as msii compute --precision (default 6)");
-    app.add_option("--pl-precision", settings.patchLinePrecision, "as msii compute --pl-precision (default: as --precision)");
+    app.add_option("--pl-precision", settings.patchLinePrecision, "as msii compute --pl-precision (default: 4/3 of --precision)");
     app.add_option("--worst", worst, "also list the K largest differences (vertex of the prepared mesh, radius index)");
     app.add_option("meshes", files, "meshes to measure (PLY, OBJ, OFF, STL); default: the generated set");
     app.add_option("-r,--radius", radius, "largest radius R for the given meshes (mesh units)");

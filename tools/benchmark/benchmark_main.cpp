@@ -97,7 +97,7 @@ int main(int argc, char** argv)
     app.add_option("--radius", radius, "largest radius R, mm (default 1)");
     app.add_option("--scales", scales, "N (default 16)");
     app.add_option("--precision", precision, "voxels per radius (default 6)");
-    app.add_option("--pl-precision", plPrecision, "cells per radius for P and L (default: as --precision)");
+    app.add_option("--pl-precision", plPrecision, "cells per radius for P and L (default: 4/3 of --precision)");
     app.add_option("--voxel-size", voxel, "finest voxel (default automatic)");
     app.add_option("--runs", runs, "runs; medians are reported (default 3)");
     app.add_option("--invariants", invariants, "which invariants, e.g. V,S (default V,S,P,L)");

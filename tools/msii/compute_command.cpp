@@ -46,7 +46,7 @@ struct ComputeArgs {
     int scales = 16;
     double voxelSize = 0;
     double precision = 6.0;
-    double plPrecision = 0;  // 0 = as precision
+    double plPrecision = 0;  // 0 = 4/3 of precision (the engine's default)
     int threads = 0;
     bool quiet = false, overwrite = false, repair = false, strict = false, noSphere = false;
     double fillHoles = -1;      // longest hole border filled; -1 = pi R (default), 0 = none
@@ -686,10 +686,10 @@ std::function<int()> addComputeCommand(CLI::App& app)
                     "Voxels per radius on the grid each radius is computed on (default 6; "
                     "higher = more exact and slower)");
     cmd->add_option("--pl-precision", args->plPrecision,
-                    "The same for P and L alone (default: as --precision; 8 brings their mean error at "
-                    "sharp edges within bounds at about 17% more total time, 12 halves their kernel blur "
-                    "at about twice their time)")
-        // Given, it must be a precision: 0 (the engine's "as V and S") is not one.
+                    "Cells per radius for P and L alone (default: 4/3 of --precision, i.e. 8; their "
+                    "kernels blur sharp edges over about a cell, so higher is more exact at sharp edges, "
+                    "and slower)")
+        // Given, it must be a precision: 0 (the engine's default) is not one.
         ->check([](const std::string& text) -> std::string {
             char* end = nullptr;
             const double v = std::strtod(text.c_str(), &end);

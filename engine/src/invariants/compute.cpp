@@ -39,7 +39,7 @@ ComputeResult prepareComputation(const TriMesh& mesh, const ComputeOptions& opti
     if (!(options.minVoxelsPerRadius >= 1) || options.minVoxelsPerRadius > 64)
         throw InvalidInputError("the precision must be between 1 and 64 voxels per radius");
     if (options.patchLinePrecision != 0 && !(options.patchLinePrecision >= 1 && options.patchLinePrecision <= 64))
-        throw InvalidInputError("the P and L precision must be between 1 and 64 cells per radius (or 0: as V and S)");
+        throw InvalidInputError("the P and L precision must be between 1 and 64 cells per radius (or 0: 4/3 of the V and S precision)");
     if (mesh.numVertices() == 0) throw InvalidInputError("the mesh has no vertices");
     if (mesh.numTriangles() == 0) throw InvalidInputError("the mesh has no faces");
 
@@ -90,7 +90,7 @@ ComputeResult prepareComputation(const TriMesh& mesh, const ComputeOptions& opti
 
 double patchLinePrecision(const ComputeOptions& options)
 {
-    return options.patchLinePrecision > 0 ? options.patchLinePrecision : options.minVoxelsPerRadius;
+    return options.patchLinePrecision > 0 ? options.patchLinePrecision : 4.0 / 3.0 * options.minVoxelsPerRadius;
 }
 
 double coarsestPrecision(const ComputeOptions& options)
@@ -203,7 +203,7 @@ ComputeResult computeInvariants(const TriMesh& mesh, const ComputeOptions& optio
     } else {
         result.invariants.radii = radii;
         result.invariants.levelOfRadius =
-            gridLevelOfRadius(radii, result.voxelSize, options.minVoxelsPerRadius);
+            volumeSphereLevels(radii, result.voxelSize, options.minVoxelsPerRadius);
         result.invariants.numLevels =
             *std::max_element(result.invariants.levelOfRadius.begin(),
                               result.invariants.levelOfRadius.end()) + 1;

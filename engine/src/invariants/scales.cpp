@@ -38,6 +38,16 @@ std::vector<int> gridLevelOfRadius(const std::vector<double>& radii, double h0,
     return levels;
 }
 
+std::vector<int> volumeSphereLevels(const std::vector<double>& radii, double h0,
+                                    double minVoxelsPerRadius)
+{
+    std::vector<int> levels = gridLevelOfRadius(radii, h0, minVoxelsPerRadius);
+    if (levels.empty() || levels.back() < 2) return levels;
+    const double finer = h0 * double(1 << (levels.back() - 1));
+    if (radii.back() / finer <= 8.0 / 3.0 * minVoxelsPerRadius + 1e-9) --levels.back();
+    return levels;
+}
+
 double dependenceReach(const std::vector<double>& radii, double h0, double minCellsPerRadius)
 {
     const std::vector<int> levels = gridLevelOfRadius(radii, h0, minCellsPerRadius);

@@ -44,7 +44,7 @@ struct LevelPlan {
 LevelPlan planLevels(const std::vector<double>& radii, double h, double k)
 {
     LevelPlan plan;
-    plan.levelOf = gridLevelOfRadius(radii, h, k);
+    plan.levelOf = volumeSphereLevels(radii, h, k);
     plan.radiiOf.resize(*std::max_element(plan.levelOf.begin(), plan.levelOf.end()) + 1);
     for (std::size_t j = 0; j < radii.size(); ++j) plan.radiiOf[plan.levelOf[j]].push_back(int(j));
     return plan;
@@ -328,6 +328,41 @@ inline double surfaceSphere(double value, double x, double a)
     return value + 0.25 * (2.0 - a * a) * x - 0.25 * a * x * x;
 }
 
+/// Weights that give the second derivative at radius j of the least-squares quadratic
+/// through the values at five consecutive radii around j (all radii if fewer). Three
+/// radii would do, but their second difference amplifies the grid's noise by √6/Δr²;
+/// five cut that by 4.6 (Savitzky–Golay), which is what keeps the results' dependence on
+/// how the grid sits (rigid motions) at its level without the term.
+struct BendWeights {
+    std::size_t first = 0;
+    std::vector<double> weights;
+};
+
+BendWeights secondDerivativeWeights(const std::vector<double>& radii, std::size_t j)
+{
+    const std::size_t nr = radii.size(), width = std::min<std::size_t>(5, nr);
+    BendWeights bw;
+    bw.first = std::min(j >= 2 ? j - 2 : 0, nr - width);
+    // Normal equations of y ≈ c0 + c1 t + c2 t², t = r − r_j; the weights are row 2 of
+    // (AᵀA)⁻¹Aᵀ, times 2.
+    double m[3][3] = {};
+    for (std::size_t k = 0; k < width; ++k) {
+        const double t = radii[bw.first + k] - radii[j], p[3] = {1.0, t, t * t};
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) m[a][b] += p[a] * p[b];
+    }
+    // Row 2 of the inverse of the symmetric 3×3 matrix: cofactors / determinant.
+    const double c0 = m[0][1] * m[1][2] - m[0][2] * m[1][1];
+    const double c1 = m[0][2] * m[1][0] - m[0][0] * m[1][2];
+    const double c2 = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    const double det = m[2][0] * c0 + m[2][1] * c1 + m[2][2] * c2;
+    for (std::size_t k = 0; k < width; ++k) {
+        const double t = radii[bw.first + k] - radii[j];
+        bw.weights.push_back(2.0 * (c0 + c1 * t + c2 * t * t) / det);
+    }
+    return bw;
+}
+
 /// Removes the smoothing bias of the voxel sums. A node's V is the sum over voxels of
 /// (voxel ∩ ball fraction) × (voxel ∩ solid fraction): the ball and the solid are each
 /// box-filtered, so V is V̂ convolved with a tent of variance h²/6 per axis, which adds
@@ -336,9 +371,10 @@ inline double surfaceSphere(double value, double x, double a)
 /// box-filtered across its radius; with Darboux's ΔŜ = Ŝ'' + 2Ŝ'/r the node's S is off by
 /// (h²/12)·(4Ŝ'/r + 3Ŝ''/2). Ŝ' is taken from V̂ across neighbouring radii (for Ŝ linear in
 /// r, V̂' = 3Ŝ'/4), which follows the surface at the scale of the ball whatever the grid
-/// (a curvature fitted within a voxel cell would not); Ŝ'' is left out (it is 0 on spheres,
-/// planes, edges and corners). On a sphere of radius 10 at r = 4 (6 voxels per radius) the
-/// bias is −7e-4 in V̂ and −9e-4 in Ŝ before this correction.
+/// (a curvature fitted within a voxel cell would not), and Ŝ'' from Ŝ across five
+/// neighbouring radii (secondDerivativeWeights; 0 on spheres, planes, edges and corners, but not where the sphere
+/// sweeps over relief: wedges, rims, tool marks). On a sphere of radius 10 at r = 4
+/// (6 voxels per radius) the bias is −7e-4 in V̂ and −9e-4 in Ŝ before this correction.
 void removeSmoothingBias(VolumeSphereResult& result, double h0)
 {
     const auto& radii = result.radii;
@@ -346,9 +382,21 @@ void removeSmoothingBias(VolumeSphereResult& result, double h0)
     if (nr < 2) return;  // no derivative across radii
     const std::size_t nv = result.volume.front().size();
     const bool sphere = !result.sphere.empty();
+    std::vector<BendWeights> bendWeights;
+    if (sphere && nr >= 3)
+        for (std::size_t j = 0; j < nr; ++j) bendWeights.push_back(secondDerivativeWeights(radii, j));
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& range) {
-        std::vector<double> slope(nr);
+        std::vector<double> slope(nr), bend(nr, 0.0);
         for (std::size_t i = range.begin(); i < range.end(); ++i) {
+            // Ŝ'' from the quadratic fitted to Ŝ at the radii around j.
+            if (!bendWeights.empty())
+                for (std::size_t j = 0; j < nr; ++j) {
+                    const BendWeights& bw = bendWeights[j];
+                    double b = 0;
+                    for (std::size_t k = 0; k < bw.weights.size(); ++k)
+                        b += bw.weights[k] * result.sphere[bw.first + k][i];
+                    bend[j] = std::isnan(b) ? 0.0 : b;
+                }
             for (std::size_t j = 0; j < nr; ++j) {
                 // Central difference where both neighbours exist (larger radii are masked
                 // first near a border), else one-sided.
@@ -367,7 +415,7 @@ void removeSmoothingBias(VolumeSphereResult& result, double h0)
                 v = float(std::clamp(v - h * h * dS / (4.0 * radii[j]), 0.0, 1.0));
                 if (sphere) {
                     float& s = result.sphere[j][i];
-                    s = float(std::clamp(s - h * h * dS / (3.0 * radii[j]), 0.0, 1.0));
+                    s = float(std::clamp(s - h * h * (dS / (3.0 * radii[j]) + bend[j] / 8.0), 0.0, 1.0));
                 }
             }
         }

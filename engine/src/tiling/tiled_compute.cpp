@@ -174,7 +174,7 @@ ComputeResult runTiles(const TriMesh& mesh, const ComputeOptions& options, const
         throw InvalidInputError("the tiles per axis must be between 1 and 1024");
     ComputeResult plan = prepareComputation(mesh, options);
     const std::vector<double> radii = equidistantRadii(options.radius, options.scales);
-    const std::vector<int> levels = gridLevelOfRadius(radii, plan.voxelSize, options.minVoxelsPerRadius);
+    const std::vector<int> levels = volumeSphereLevels(radii, plan.voxelSize, options.minVoxelsPerRadius);
     const double h0 = plan.voxelSize;
     // Border distances are searched up to the values' reach + 2 h_0 (computeInvariants).
     const double halo = dependenceReach(radii, h0, coarsestPrecision(options)) + 4.0 * h0;

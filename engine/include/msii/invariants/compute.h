@@ -24,11 +24,11 @@ struct ComputeOptions {
     double voxelSize = 0;
     /// Precision knob: each radius is evaluated on the coarsest grid where r/h >= this.
     double minVoxelsPerRadius = 6.0;
-    /// The same for P and L (their sample cells); 0 = minVoxelsPerRadius. P and L are
-    /// blurred by their kernels over about a cell; at sharp edges (a slab's walls, a wedge's
-    /// rim) that blur dominates their error. 8 brings their mean differences from the exact
-    /// mode on closed and scan-like slabs within 1e-3 (P) and 3e-3 (L), at about 17 % more
-    /// total time on the benchmark (docs/accuracy.md).
+    /// The same for P and L (their sample cells); 0 = 4/3 · minVoxelsPerRadius (8 by
+    /// default). P and L are blurred by their kernels over about a cell; at sharp edges (a
+    /// slab's walls, a wedge's rim) that blur dominates their error, and 8 cells per radius
+    /// are what brings their mean differences from the exact mode on closed and scan-like
+    /// slabs within 1e-3 (P) and 3e-3 (L) (docs/accuracy.md).
     double patchLinePrecision = 0;
     /// Which invariants (paper Eq. 2). V and S share the level set and one stencil pass;
     /// P and L share one pass over the surface samples.
@@ -62,7 +62,7 @@ struct ComputeResult {
     std::vector<std::string> warnings; ///< things the user should know (one sentence each)
 };
 
-/// Cells per radius of P and L: patchLinePrecision, or minVoxelsPerRadius if that is 0.
+/// Cells per radius of P and L: patchLinePrecision, or 4/3 · minVoxelsPerRadius if that is 0.
 double patchLinePrecision(const ComputeOptions& options);
 /// The smaller of the two precisions: the coarsest grid levels, which reach farthest
 /// (dependenceReach of invariants/scales.h).

@@ -20,6 +20,17 @@ void validateRadii(const std::vector<double>& radii);
 std::vector<int> gridLevelOfRadius(const std::vector<double>& radii, double h0,
                                    double minCellsPerRadius);
 
+/// The grid level of each radius for V and S: gridLevelOfRadius, except that the largest
+/// radius R goes one level finer (at least 2·minVoxelsPerRadius voxels) when that level is
+/// not the finest and R spans at most 8/3·minVoxelsPerRadius voxels there. V̂ at R is the
+/// `quality` users look at first, and its largest errors fall about 3× from R/h = 8 to 16
+/// (docs/accuracy.md). The level below already holds radii of up to 2·minVoxelsPerRadius
+/// voxels, so its stencil grows by at most (4/3)³ in volume, on a level with a quarter of
+/// the finest level's nodes or fewer; on the finest level the cost would be several times
+/// the whole stencil stage, so R stays where it is.
+std::vector<int> volumeSphereLevels(const std::vector<double>& radii, double h0,
+                                    double minVoxelsPerRadius);
+
 /// How far from a vertex its values may depend on the mesh, at most: max over the radii of
 /// r + max(4 h_l + 2 h0, min(r, 6 h_l) + (2 + √3) h_l + h0): V and S's stencils and
 /// interpolation reach r + 4 h_l + 2 h0; P and L's values come from samples within 2 h_l,
