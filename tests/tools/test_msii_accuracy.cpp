@@ -1,7 +1,8 @@
 // msii-accuracy as users run it: on a given mesh it prints one table row per mesh with the
 // mean and largest differences of V̂, Ŝ, P̂ and L̂ between the fast and the exact mode. On a
-// flat open patch both modes are near-exact, so the row's figures must be small; a missing
-// radius is a usage error.
+// flat open patch both modes are near-exact, so the row's figures must be small; on the
+// generated scan-like set the means must be within the bounds the documentation quotes; a
+// missing radius is a usage error.
 #include <msii/io/write_ply.h>
 #include <msii/samples/generators.h>
 
@@ -47,6 +48,50 @@ TEST(AccuracyCli, FlatPatchRowIsSmallAndComplete)
         ++checked;
     }
     EXPECT_EQ(checked, 6u);
+}
+
+namespace {
+/// The cells of the table row that starts with "| @p name", split at '|' (an empty first cell).
+std::vector<std::string> rowCells(const std::string& out, const std::string& name)
+{
+    const std::size_t at = out.find("| " + name);
+    if (at == std::string::npos) return {};
+    std::istringstream row(out.substr(at, out.find('\n', at) - at));
+    std::vector<std::string> cells;
+    for (std::string cell; std::getline(row, cell, '|');) cells.push_back(cell);
+    return cells;
+}
+} // namespace
+
+// The generated set at the default settings (seed 1, 200 vertices): tablet, closed slab,
+// scan-like slab (3:1 triangles, 4x density, noise of a tenth of an edge, long walls) and a
+// scan-like sheet 2 R thick. Bounds: means of V̂, Ŝ, P̂ within 1e-3 and of L̂ within 3e-3, and
+// on the tablet V̂ at R within 5e-4 at every vertex.
+TEST(AccuracyCli, GeneratedSetMeansWithinBounds)
+{
+    const msii::test::TempDir dir;
+    const msii::test::RunResult r = msii::test::runProgram(MSII_ACCURACY_EXE, "", dir.path());
+    ASSERT_EQ(r.code, 0) << r.err;
+    std::size_t rows = 0;
+    for (const std::string name : {"tablet", "closed tablet slab", "scan-like slab", "scan-like sheet"}) {
+        const std::vector<std::string> cells = rowCells(r.out, name);
+        ASSERT_EQ(cells.size(), 10u) << name << "\n" << r.out;
+        const double bound[4] = {1e-3, 1e-3, 1e-3, 3e-3};
+        for (std::size_t c = 4; c < 8; ++c) {
+            double mean = -1, largest = -1;
+            ASSERT_EQ(std::sscanf(cells[c].c_str(), " %lf / %lf", &mean, &largest), 2) << cells[c];
+            EXPECT_GT(mean, 0.0) << name << " column " << c;  // something was compared
+            EXPECT_LE(mean, bound[c - 4]) << name << " column " << c << ": " << cells[c];
+        }
+        if (name == std::string("tablet")) {
+            double mean = -1, largest = -1;
+            ASSERT_EQ(std::sscanf(cells[8].c_str(), " %lf / %lf", &mean, &largest), 2) << cells[8];
+            EXPECT_GT(largest, 0.0);
+            EXPECT_LE(largest, 5e-4) << "V at R on the tablet: " << cells[8];
+        }
+        ++rows;
+    }
+    EXPECT_EQ(rows, 4u);
 }
 
 TEST(AccuracyCli, MeshWithoutRadiusIsAUsageError)
