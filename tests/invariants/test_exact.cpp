@@ -1,7 +1,7 @@
 // The exact reference mode: the per-triangle closed forms against brute-force quadrature,
-// then V̂, Ŝ, P̂ and L̂ against the closed forms of MSII-REFERENCE §1 (cube corners and
-// edges, planes, a sphere and a spherical cavity), the identity S = dV/dr, rigid-motion
-// invariance, border masking, bad input and thread-count independence.
+// then V̂, Ŝ, P̂ and L̂ against the closed forms of docs/method.md, Closed forms (cube
+// corners and edges, planes, a sphere and a spherical cavity), the identity S = dV/dr,
+// rigid-motion invariance, border masking, bad input and thread-count independence.
 #include <msii/invariants/exact.h>
 
 #include <msii/core/errors.h>
@@ -322,7 +322,7 @@ TEST(Exact, TrianglePiecesKnownValues)
 }
 
 // ---------------------------------------------------------------------------------------
-// Closed forms on meshes (MSII-REFERENCE §1).
+// Closed forms on meshes (docs/method.md, Closed forms).
 
 TEST(Exact, CubeCornersAndEdges)
 {
@@ -487,9 +487,9 @@ double meanChordGap(const TriMesh& mesh, double radius)
 /// Discretisation error: the faces are chords, so the mesh is (on average) the sphere moved
 /// inwards by the mean gap g, with each vertex g above (convex) or below (cavity) it. A
 /// ball whose centre is x·r off the surface has V̂ = V̂(0) ∓ ¾x + O(x²) and
-/// Ŝ = Ŝ(0) ∓ (2 − r²/R²)x/4 + O(x²) (README, "How it works" 4), x = g/r; P̂ and L̂ move
-/// only at second order (1 − g²/r², and g/R). The test asserts both the raw error against
-/// that bound and the residual after removing the first-order offset.
+/// Ŝ = Ŝ(0) ∓ (2 − r²/R²)x/4 + O(x²) (docs/method.md, Back to the vertices), x = g/r; P̂
+/// and L̂ move only at second order (1 − g²/r², and g/R). The test asserts both the raw
+/// error against that bound and the residual after removing the first-order offset.
 void checkSphere(bool cavity)
 {
     const TriMesh mesh = testSphere(cavity);
@@ -574,8 +574,8 @@ std::vector<std::uint32_t> middleTopVertices(const TriMesh& mesh, std::size_t co
 }
 } // namespace
 
-// S is the radial derivative of V (MSII-REFERENCE §1): central differences of the exact V
-// over ±1e-4 match the exact S, on a curved, irregular surface.
+// S is the radial derivative of V (docs/method.md, Exact identities): central differences
+// of the exact V over ±1e-4 match the exact S, on a curved, irregular surface.
 TEST(Exact, SphereAreaIsVolumeDerivative)
 {
     const TriMesh mesh = samples::makeHeightField(terrainSlab());

@@ -1,6 +1,6 @@
-// Accuracy of V and S against the closed forms of MSII-REFERENCE §1 (tolerances from
-// issue 2), and the properties they must have: rigid-motion invariance, open patch = closed
-// slab away from the border, border masking, thread-count independence.
+// Accuracy of V and S against the closed forms of docs/method.md, Closed forms, and the
+// properties they must have: rigid-motion invariance, open patch = closed slab away from
+// the border, border masking, thread-count independence.
 #include <msii/invariants/compute.h>
 #include <msii/samples/generators.h>
 
@@ -247,10 +247,10 @@ samples::HeightFieldOptions smallTablet(bool closed)
 } // namespace
 
 // An open, scan-like terrain patch, rotated about an oblique axis and moved: the voxel
-// grid then cuts it quite differently. The issue asks for 1e-3 over radii >= 3 median
-// edges; measured at the default precision (6): max 6.5e-4 (V) and 8.1e-4 (S), mean 7e-5
-// and 1.2e-4; at precision 7: 5.2e-4 and 7.0e-4. On sharp creases (the tablet's wedges)
-// the maximum is about 3e-3 (README, limits).
+// grid then cuts it quite differently. The bound is 1e-3 over radii >= 3 median edges; at
+// the default precision (6): max 6.5e-4 (V) and 8.1e-4 (S), mean 7e-5 and 1.2e-4; at
+// precision 7: 5.2e-4 and 7.0e-4. On sharp creases (the tablet's wedges) the maximum is
+// about 3e-3 (README, limits).
 TEST(VolumeSphere, RigidMotionInvariance)
 {
     samples::HeightFieldOptions ho;

@@ -96,6 +96,38 @@ TEST(WritePly, BinaryRoundTripIsExact)
     EXPECT_EQ(dir.entries(), std::vector<std::string>{"out.ply"});
 }
 
+// Integer properties (labels, counts) are written as int, NaN as 0, and read back as
+// integers; a name prefix (CloudCompare's scalar_) is written to the header and taken off
+// again by the reader, so msii reads what it wrote either way.
+TEST(WritePly, IntegerPropertiesAndNamePrefix)
+{
+    TempDir dir;
+    Sample s = sample();
+    s.properties.push_back({"label", {3, 0, std::numeric_limits<float>::quiet_NaN(), 16777216}, true});
+    for (const bool binary : {true, false}) {
+        SCOPED_TRACE(binary ? "binary" : "ascii");
+        WritePlyOptions options;
+        options.binary = binary;
+        options.propertyPrefix = "scalar_";
+        const std::string path = dir.file(binary ? "int.ply" : "int-ascii.ply");
+        writePly(path, s.mesh, s.properties, options);
+        const std::string bytes = readFile(path);
+        const std::string header = bytes.substr(0, bytes.find("end_header\n"));
+        EXPECT_NE(header.find("property float scalar_V_01\nproperty float scalar_quality\n"
+                              "property float scalar_curvature\nproperty int scalar_label\n"),
+                  std::string::npos) << header;
+        ReadMeshOptions ro;
+        ro.keepVertexProperties = true;
+        const ReadMeshResult back = readPly(path, ro);
+        ASSERT_EQ(back.vertexProperties.size(), 4u);
+        EXPECT_EQ(back.vertexProperties[1].name, "quality");
+        EXPECT_FALSE(back.vertexProperties[1].integer);
+        EXPECT_EQ(back.vertexProperties[3].name, "label");
+        EXPECT_TRUE(back.vertexProperties[3].integer);
+        EXPECT_EQ(back.vertexProperties[3].values, (std::vector<float>{3, 0, 0, 16777216}));
+    }
+}
+
 TEST(WritePly, AsciiRoundTripIsExact)
 {
     TempDir dir;
@@ -236,7 +268,7 @@ TEST(PlyPieceWriter, PiecesInAnyOrderGiveTheBytesOfWritePly)
         writePly(dir.file("whole.ply"), mesh, properties, options);
         fs::remove(dir.file("pieces.ply"));
         {
-            PlyPieceWriter pieces(dir.file("pieces.ply"), mesh, {"V_01", "quality"}, options);
+            PlyPieceWriter pieces(dir.file("pieces.ply"), mesh, {{"V_01"}, {"quality"}}, options);
             // Three pieces, last vertices first; vertex 0 is part of the second piece.
             const std::vector<std::vector<std::uint32_t>> parts = {
                 {200, 201, 202, 250, 251, 299}, {0, 1, 2, 3, 150}, {}};
@@ -261,7 +293,7 @@ TEST(PlyPieceWriter, PiecesInAnyOrderGiveTheBytesOfWritePly)
 
     // Vertices never given are NaN; the rest as given.
     {
-        PlyPieceWriter pieces(dir.file("partial.ply"), mesh, {"V_01"});
+        PlyPieceWriter pieces(dir.file("partial.ply"), mesh, {{"V_01"}});
         const float value[2] = {0.25f, 0.5f};
         pieces.write({7, 8}, {value});
         pieces.commit();
@@ -281,7 +313,7 @@ TEST(PlyPieceWriter, PiecesInAnyOrderGiveTheBytesOfWritePly)
 
     // Abandoned (e.g. a tile failed): no file, no temporary.
     {
-        PlyPieceWriter pieces(dir.file("abandoned.ply"), mesh, {"V_01"});
+        PlyPieceWriter pieces(dir.file("abandoned.ply"), mesh, {{"V_01"}});
         const float value = 1;
         pieces.write({3}, {&value});
     }
@@ -290,14 +322,14 @@ TEST(PlyPieceWriter, PiecesInAnyOrderGiveTheBytesOfWritePly)
         EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
 
     // Misuse is refused.
-    PlyPieceWriter pieces(dir.file("misuse.ply"), mesh, {"V_01"});
+    PlyPieceWriter pieces(dir.file("misuse.ply"), mesh, {{"V_01"}});
     const float value = 1;
     EXPECT_THROW(pieces.write({300}, {&value}), InvalidInputError);
     EXPECT_THROW(pieces.write({3}, {}), InvalidInputError);
     WritePlyOptions ascii;
     ascii.binary = false;
-    EXPECT_THROW(PlyPieceWriter(dir.file("ascii.ply"), mesh, {"V_01"}, ascii), InvalidInputError);
-    EXPECT_THROW(PlyPieceWriter(dir.file("bad.ply"), mesh, {"two words"}), InvalidInputError);
+    EXPECT_THROW(PlyPieceWriter(dir.file("ascii.ply"), mesh, {{"V_01"}}, ascii), InvalidInputError);
+    EXPECT_THROW(PlyPieceWriter(dir.file("bad.ply"), mesh, {{"two words"}}), InvalidInputError);
 }
 
 TEST(AtomicFile, CommitReplacesTargetAndLeavesNoTemporary)

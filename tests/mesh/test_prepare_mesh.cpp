@@ -365,9 +365,9 @@ std::vector<std::uint32_t> punchPinHoles(TriMesh& mesh, std::size_t count, doubl
     return centres;
 }
 
-/// The pin-hole check of the issue: at R = 30 median edges, >= 99.5 % of the vertices have
-/// values at R, and every value at radii of >= 3 median edges is within 2e-3 (V, S) and
-/// 5e-3 (P, L) of the intact mesh's.
+/// The pin-hole check: at R = 30 median edges, >= 99.5 % of the vertices have values at R,
+/// and every value at radii of >= 3 median edges is within 2e-3 (V, S) and 5e-3 (P, L) of
+/// the intact mesh's.
 void checkPinHoles(const TriMesh& intact, const char* title)
 {
     const MeshStats stats = computeMeshStats(intact);

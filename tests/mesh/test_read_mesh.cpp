@@ -236,7 +236,7 @@ TEST(ReadPly, VertexListsKeptAsNumberedProperties)
                   std::string::npos)
             << e.what();
     }
-    options.keepVertexLists = false;  // skipped as before
+    options.keepVertexLists = false;  // the default: lists are skipped
     EXPECT_TRUE(readPly(path, options).vertexProperties.empty());
 }
 

@@ -770,10 +770,10 @@ TEST(SampleCli, BadOptionsExitTwoWithOneLine)
     EXPECT_FALSE(std::ifstream(::testing::TempDir() + "never_written.ply").good());
 }
 
-// The streamed writer (issue 6: a 50M-vertex terrain without holding it) writes byte for
-// byte what writePly writes for makeHeightField, for every kind, band boundaries included
-// (130 rows = two full bands of 64 and a short one), float and double points; and the
-// msii-samples program streams open height fields.
+// The streamed writer (a 50M-vertex terrain without holding it) writes byte for byte what
+// writePly writes for makeHeightField, for every kind, band boundaries included (130 rows =
+// two full bands of 64 and a short one), float and double points; and the msii-samples
+// program streams open height fields.
 TEST(SampleHeightField, StreamedFileEqualsTheMeshWritten)
 {
     const std::string dir = ::testing::TempDir();

@@ -1,7 +1,7 @@
 // Tiled computation (tiling/tiled_compute.h) against the untiled one: every feature of every
-// vertex bit-identical (issue 6 asked for 1e-6), NaN masks equal, on an open
-// tablet and a closed sphere, for forced tile counts and for tiles sized from a memory
-// budget; a budget too small for even one tile is refused with the amount needed.
+// vertex bit-identical, NaN masks equal, on an open tablet and a closed sphere, for forced
+// tile counts and for tiles sized from a memory budget; a budget too small for even one
+// tile is refused with the amount needed.
 #include <msii/core/errors.h>
 #include <msii/samples/generators.h>
 #include <msii/mesh/mesh_check.h>
@@ -112,10 +112,10 @@ TriMesh slabWithLongWalls(double width, double height, double spacing, double th
 TEST(TiledCompute, SlabWithLongWallTrianglesEqualsUntiled)
 {
     // A fine irregular top next to thin walls and a bottom of long triangles: the tiles hold
-    // more or less surface per vertex than the whole mesh. When P and L chose their route per
-    // level from this mesh's counts (samples against vertices), 3 x 3 tiles took the fit
-    // where the whole mesh evaluated at the vertices: differences up to 1.0, and NaN
-    // against numbers.
+    // more or less surface per vertex than the whole mesh, so a route for P and L chosen per
+    // level from a tile's own counts (samples against vertices) could differ from the whole
+    // mesh's; it is chosen from the whole mesh's vertex spacing (docs/method.md, Where P and
+    // L are evaluated).
     const TriMesh mesh = slabWithLongWalls(10, 8, 0.04, 1.0, 1.5);
     const MeshCheckResult check = checkMesh(mesh);
     ASSERT_TRUE(check.closed);
@@ -178,9 +178,9 @@ TEST(TiledCompute, DenseTabletEqualsUntiledBitForBit)
 // Every vertex moved onto a voxel face or centre plane: x and y multiples of 1/32 mm, which
 // are exact binary numbers and multiples of h/2 for h = 1/48 mm, which is not. There a
 // vertex's cell is a tie between two, decided by rounding: the tiles' grids are shifted by
-// other whole blocks than the whole mesh's, and the tie must still be broken the same way.
-// Before the shift was kept as an integer number of voxels, this test failed, and 21
-// vertices of the 1.1M benchmark surface differed by up to 2e-4.
+// other whole blocks than the whole mesh's, and the tie must still be broken the same way:
+// positions come from the global index, with the shift kept as a whole number of voxels
+// (docs/method.md, Level set).
 TEST(TiledCompute, VerticesOnVoxelPlanesEqualUntiledBitForBit)
 {
     TriMesh mesh = tablet();
@@ -189,7 +189,7 @@ TEST(TiledCompute, VerticesOnVoxelPlanesEqualUntiledBitForBit)
     co.voxelSize = 1.0 / 48.0;
     co.computePatch = co.computeLine = false;  // the tie is in V and S's cell choice
     const double step = 1.0 / 32.0;
-    // Moved by 12 mm, where the rounding of the old shifted index broke ties both ways.
+    // Moved by 12 mm, where an index shifted in floating point would round ties both ways.
     for (Vec3& p : mesh.points)
         p.x = 12.0 + std::round(p.x / step) * step, p.y = 12.0 + std::round(p.y / step) * step;
     const TiledAgainstWhole t = tiledAgainstWhole(mesh, co, 3);

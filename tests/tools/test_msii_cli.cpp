@@ -118,13 +118,37 @@ TEST(MsiiCli, ComputeWritesFeaturesAndSidecar)
     for (const auto& p : res.vertexProperties) names.push_back(p.name);
     const std::vector<std::string> expected{"V_01", "V_02", "V_03", "V_04", "S_01", "S_02",
                                             "S_03", "S_04", "P_01", "P_02", "P_03", "P_04",
-                                            "L_01", "L_02", "L_03", "L_04", "quality", "filled_share"};
+                                            "L_01", "L_02", "L_03", "L_04", "quality", "valid_radii",
+                                            "filled_share"};
     ASSERT_EQ(names, expected);
     // Middle of a gently curved tablet: values near one half; near the border: NaN.
     std::size_t finite = 0, masked = 0;
     for (float v : res.vertexProperties[0].values) (std::isnan(v) ? masked : finite)++;
     EXPECT_GT(finite, 0u);
     EXPECT_GT(masked, 0u);
+    // quality is never NaN (MeshLab aborts on it): V at the largest radius with a value, 0
+    // where none has one; valid_radii, an int property, counts those radii.
+    EXPECT_FALSE(res.vertexProperties[16].integer);
+    EXPECT_TRUE(res.vertexProperties[17].integer);
+    EXPECT_NE(readFile(out.string()).find("property int valid_radii\n"), std::string::npos);
+    std::size_t partial = 0, none = 0, checked = 0;
+    for (std::size_t i = 0; i < res.mesh.numVertices(); ++i) {
+        const float quality = res.vertexProperties[16].values[i];
+        const float count = res.vertexProperties[17].values[i];
+        ASSERT_FALSE(std::isnan(quality)) << "vertex " << i;
+        int valid = 0;
+        float largest = 0;
+        for (std::size_t j = 0; j < 4; ++j)
+            if (!std::isnan(res.vertexProperties[j].values[i])) ++valid, largest = res.vertexProperties[j].values[i];
+        EXPECT_EQ(count, float(valid)) << "vertex " << i;
+        EXPECT_EQ(quality, largest) << "vertex " << i;
+        partial += valid > 0 && valid < 4;
+        none += valid == 0;
+        ++checked;
+    }
+    EXPECT_EQ(checked, res.mesh.numVertices());
+    EXPECT_GT(partial, 0u);  // the rule was exercised: border vertices with some radii
+    EXPECT_GT(none, 0u);
     const std::string json = readFile((tempDir() / "good.json").string());
     for (const char* key : {"\"radii\"", "\"voxel_size\"", "\"timings_seconds\"", "\"version\"", "\"median\""})
         EXPECT_NE(json.find(key), std::string::npos) << key;
@@ -204,7 +228,8 @@ TEST(MsiiCli, ExactModeSelectionAndGigaMeshFiles)
     const ReadMeshResult f = readMesh(fast.string(), ro), e = readMesh(exact.string(), ro);
     std::vector<std::string> names;
     for (const auto& p : e.vertexProperties) names.push_back(p.name);
-    ASSERT_EQ(names, (std::vector<std::string>{"V_01", "V_02", "V_03", "V_04", "P_01", "P_02", "P_03", "P_04", "quality", "filled_share"}));
+    ASSERT_EQ(names, (std::vector<std::string>{"V_01", "V_02", "V_03", "V_04", "P_01", "P_02", "P_03", "P_04", "quality",
+                                               "valid_radii", "filled_share"}));
     std::size_t computed = 0, compared = 0;
     for (std::size_t i = 0; i < e.mesh.numVertices(); ++i) {
         if (std::isnan(e.vertexProperties[0].values[i])) continue;
@@ -267,7 +292,14 @@ TEST(MsiiCli, MetricAndSmoothAfterCompute)
             EXPECT_TRUE(sameFloats(out.at(name), values)) << name << " kept as it was";
         }
     ASSERT_TRUE(out.count("f_l2") && out.count("f_mahalanobis") && out.count("f_l1w"));
-    EXPECT_TRUE(sameFloats(out.at("quality"), out.at("f_l2")));
+    {  // quality = f_l2, and 0 where that is undefined (never NaN)
+        std::vector<float> expected = out.at("f_l2");
+        std::size_t undefined = 0;
+        for (float& v : expected)
+            if (std::isnan(v)) v = 0.0f, ++undefined;
+        EXPECT_GT(undefined, 0u);
+        EXPECT_TRUE(sameFloats(out.at("quality"), expected));
+    }
     std::size_t checked = 0, masked = 0;
     for (std::size_t i = 0; i < nv; ++i) {
         double l2 = 0, l1w = 0;
@@ -558,6 +590,47 @@ TEST(MsiiCli, TiledComputeWritesTheSameFeatures)
     EXPECT_NE(readFile((tempDir() / "tiled.msii.json").string()).find("\"tiles_per_axis\": 2"), std::string::npos);
     expectCleanFailure("'" + smallPatch() + "' -r 0.6 --memory-budget 10K", "too small for even one tile");
     expectCleanFailure("'" + smallPatch() + "' -r 0.6 --memory-budget lots", "is not a size");
+}
+
+// --property-names cloudcompare: every vertex property named scalar_<name> (CloudCompare's
+// command line loads only those as scalar fields), the same values, tiled or not; msii's own
+// commands read such files by their plain names.
+TEST(MsiiCli, CloudCompareNames)
+{
+    const fs::path plain = tempDir() / "cc-plain.ply", cc = tempDir() / "cc.ply", ccTiled = tempDir() / "cc-tiled.ply";
+    RunResult r = runMsii("compute '" + smallPatch() + "' -r 0.6 -n 4 -q --overwrite --output '" + plain.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = runMsii("compute '" + smallPatch() + "' -r 0.6 -n 4 -q --overwrite --property-names cloudcompare --output '" +
+                cc.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::string bytes = readFile(cc.string());
+    const std::string header = bytes.substr(0, bytes.find("end_header"));
+    std::size_t named = 0;
+    for (const char* line : {"property float scalar_V_01\n", "property float scalar_L_04\n",
+                             "property float scalar_quality\n", "property int scalar_valid_radii\n",
+                             "property float scalar_filled_share\n", "property float x\n"}) {
+        EXPECT_NE(header.find(line), std::string::npos) << line << header;
+        ++named;
+    }
+    EXPECT_EQ(named, 6u);
+    EXPECT_EQ(header.find("property float V_01"), std::string::npos) << header;
+    const auto a = propertiesOf(plain), b = propertiesOf(cc);
+    ASSERT_EQ(a.size(), 19u);
+    ASSERT_EQ(a.size(), b.size());
+    for (const auto& [name, values] : a) {
+        ASSERT_TRUE(b.count(name)) << name;
+        EXPECT_TRUE(sameFloats(values, b.at(name))) << name;
+    }
+    r = runMsii("compute '" + smallPatch() + "' -r 0.6 -n 4 -q --overwrite --tiles 2 --property-names cloudcompare "
+                "--output '" + ccTiled.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_TRUE(readFile(cc.string()) == readFile(ccTiled.string()));
+    const fs::path m = tempDir() / "cc-metric.ply";
+    r = runMsii("metric '" + cc.string() + "' --invariants V --metric l2 -q --overwrite --property-names cloudcompare "
+                "--output '" + m.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(readFile(m.string()).find("property float scalar_f_l2\n"), std::string::npos);
+    expectCleanFailure("'" + smallPatch() + "' -r 0.6 --property-names meshlab", "--property-names");
 }
 
 // Tiles computed separately (one job each: --tiles K --tile I) and joined by msii merge give

@@ -4,6 +4,7 @@
 
 #include <functional>
 #include <memory>
+#include <string>
 
 #include <tbb/global_control.h>
 
@@ -12,6 +13,11 @@ namespace msii::tools {
 /// --threads N: 0 = all cores (null), else a TBB limit held for the returned object's life.
 /// @throw InvalidInputError if N < 0.
 std::unique_ptr<tbb::global_control> limitThreads(int threads);
+
+/// --property-names msii|cloudcompare on @p cmd, into @p prefix: "" or "scalar_", which
+/// WritePlyOptions::propertyPrefix puts before every vertex property's name (CloudCompare's
+/// command line loads PLY vertex properties as scalar fields only when so named).
+void addPropertyNamesOption(CLI::App* cmd, std::string& prefix);
 
 /// Adds `msii compute`; the returned function runs it (after parsing) and returns the exit code.
 std::function<int()> addComputeCommand(CLI::App& app);

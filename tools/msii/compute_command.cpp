@@ -28,6 +28,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <random>
@@ -47,6 +48,7 @@ struct ComputeArgs {
     double voxelSize = 0;
     double precision = 6.0;
     double plPrecision = 0;  // 0 = 4/3 of precision (the engine's default)
+    std::string propertyPrefix;  // --property-names
     int threads = 0;
     bool quiet = false, overwrite = false, repair = false, strict = false, noSphere = false;
     double fillHoles = -1;      // longest hole border filled; -1 = pi R (default), 0 = none
@@ -310,8 +312,10 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                 << " R=" << args.radius << " N=" << r.invariants.radii.size() << " voxel=" << r.voxelSize
                 << "; V_jj = V/|B_r|, S_jj = S/(4 pi r^2) (plane 0.5), P_jj = P/(pi r^2), L_jj = "
                    "L/(2 pi r) (plane 1), r_j = j*R/N; NaN = ball reaches the border"
-                << (args.exact ? " or vertex not computed" : "") << "; quality = " << qualityName;
+                << (args.exact ? " or vertex not computed" : "") << "; quality = " << qualityName.substr(0, 1)
+                << " at the largest radius with a value (0 if none), valid_radii = how many radii have one";
         plyOptions.comments.push_back(comment.str());
+        plyOptions.propertyPrefix = args.propertyPrefix;
         if (args.tile >= 0)  // read by msii merge
             plyOptions.comments.push_back("msii tile " + std::to_string(args.tile) + " of " +
                                           std::to_string(args.tiles) + " x " + std::to_string(args.tiles) +
@@ -347,7 +351,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                     std::vector<float> share(part.vertices.size());
                     for (std::size_t l = 0; l < part.vertices.size(); ++l) share[l] = filledShare[part.vertices[l]];
                     props.push_back({"filled_share", std::move(share)});
-                    for (VertexProperty& p : props) {
+                    for (VertexProperty& p : props) {  // (keeps p.integer)
                         std::vector<float> expanded(rows.size());
                         for (std::size_t i = 0; i < rows.size(); ++i) expanded[i] = p.values[rows[i]];
                         p.values.swap(expanded);
@@ -355,8 +359,13 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                     std::vector<const float*> columns;
                     for (const VertexProperty& p : props) columns.push_back(p.values.data());
                     if (!pieces) {
-                        std::vector<std::string> names;
-                        for (const VertexProperty& p : props) names.push_back(p.name);
+                        // Vertices in no tile (in no face) get NaN features, and quality and
+                        // valid_radii 0, as in writePly's output.
+                        std::vector<PlyColumn> names;
+                        for (const VertexProperty& p : props)
+                            names.push_back({p.name, p.integer,
+                                             p.integer || p.name == "quality" ? 0.0f
+                                                                              : std::numeric_limits<float>::quiet_NaN()});
                         pieces = std::make_unique<PlyPieceWriter>(output, read.mesh, names, plyOptionsFor(part.values));
                     }
                     if (!vertices.empty()) pieces->write(vertices, columns);
@@ -642,6 +651,16 @@ std::string nowUtc()
 
 } // namespace
 
+void addPropertyNamesOption(CLI::App* cmd, std::string& prefix)
+{
+    static const std::map<std::string, std::string> styles{{"msii", ""}, {"cloudcompare", "scalar_"}};
+    cmd->add_option("--property-names", prefix,
+                    "Names of the output PLY's vertex properties: msii (V_01 ... quality; default) or "
+                    "cloudcompare (scalar_V_01 ... scalar_quality, which CloudCompare's command line "
+                    "loads as scalar fields)")
+        ->transform(CLI::CheckedTransformer(styles, CLI::ignore_case));
+}
+
 std::unique_ptr<tbb::global_control> limitThreads(int threads)
 {
     if (threads < 0) throw InvalidInputError("--threads must be 0 (all cores) or more");
@@ -699,6 +718,7 @@ std::function<int()> addComputeCommand(CLI::App& app)
     cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
     cmd->add_flag("-q,--quiet", args->quiet, "No progress, no summary; errors only");
     cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs");
+    addPropertyNamesOption(cmd, args->propertyPrefix);
     cmd->add_flag("--strict", args->strict,
                   "Refuse meshes that need repair (duplicate or degenerate faces, non-manifold edges or "
                   "vertices, vertices at the same position, inconsistent orientation) instead of repairing them");

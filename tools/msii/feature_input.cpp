@@ -44,6 +44,14 @@ FeatureMesh readFeatureMesh(const std::string& input, const std::vector<std::str
     return out;
 }
 
+void qualityWithoutNaN(std::vector<VertexProperty>& properties)
+{
+    for (VertexProperty& p : properties)
+        if (p.name == "quality")
+            for (float& v : p.values)
+                if (std::isnan(v)) v = 0.0f;
+}
+
 std::size_t findProperty(const FeatureMesh& in, const std::string& name)
 {
     for (std::size_t k = 0; k < in.properties.size(); ++k)

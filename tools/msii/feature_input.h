@@ -18,6 +18,11 @@ struct FeatureMesh {
 /// features by those of each GigaMesh `.mat` file in @p matFiles.
 FeatureMesh readFeatureMesh(const std::string& input, const std::vector<std::string>& matFiles);
 
+/// Replaces NaN in the property `quality` (if any) by 0: viewers colour by quality without
+/// checking (MeshLab 2020.09 aborts on NaN), so no msii output holds NaN there. Other
+/// properties keep NaN where a value is undefined.
+void qualityWithoutNaN(std::vector<VertexProperty>& properties);
+
 /// "V_07": a feature element of invariant @p letter (V, S, P or L; 0 = any of them).
 bool isFeatureName(const std::string& name, char letter = 0);
 

@@ -23,6 +23,7 @@ struct MergeArgs {
     std::vector<std::string> parts;
     std::string output;
     bool quiet = false, overwrite = false;
+    std::string propertyPrefix;  // --property-names
 };
 
 int runMerge(const MergeArgs& args)
@@ -90,7 +91,9 @@ int runMerge(const MergeArgs& args)
                 throw InvalidInputError("vertex " + std::to_string(v) + " was computed by none of the parts");
             }
     WritePlyOptions plyOptions;
+    plyOptions.propertyPrefix = args.propertyPrefix;
     plyOptions.comments = merged.comments;
+    qualityWithoutNaN(merged.properties);
     writePly(output, merged.mesh, merged.properties, plyOptions);
     if (!args.quiet)
         std::fprintf(stderr, "msii: %zu tiles -> %s (%zu vertices, %.1f s)\n", args.parts.size(), output.c_str(),
@@ -110,6 +113,7 @@ std::function<int()> addMergeCommand(CLI::App& app)
     cmd->add_option("-o,--output", args->output, "Output PLY (default <first part's stem>.merged.ply)");
     cmd->add_flag("-q,--quiet", args->quiet, "Errors only");
     cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output");
+    addPropertyNamesOption(cmd, args->propertyPrefix);
     return [args]() { return runMerge(*args); };
 }
 

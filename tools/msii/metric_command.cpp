@@ -29,6 +29,7 @@ struct MetricArgs {
     std::string reference = "flat";
     int threads = 0;
     bool quiet = false, overwrite = false;
+    std::string propertyPrefix;  // --property-names
 };
 
 struct NamedMetric {
@@ -174,11 +175,13 @@ int runMetric(const MetricArgs& args)
     mergeProperties(in.properties, std::move(add));
 
     WritePlyOptions options;
+    options.propertyPrefix = args.propertyPrefix;
     std::ostringstream comment;
     comment << "msii " << versionString() << " metric " << args.metrics << " of " << args.invariants
-            << " against " << referenceText << "; quality = f_" << metrics.front().name;
+            << " against " << referenceText << "; quality = f_" << metrics.front().name << " (0 where NaN)";
     options.comments = in.comments;  // keep the provenance (e.g. compute's R and N)
     options.comments.push_back(comment.str());
+    qualityWithoutNaN(in.properties);
     writePly(output, in.mesh, in.properties, options);
     if (!args.quiet)
         std::fprintf(stderr, "msii: %s -> %s (%zu vertices, %zu features, reference %s, %.1f s)\n%s",
@@ -216,6 +219,7 @@ std::function<int()> addMetricCommand(CLI::App& app)
     cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
     cmd->add_flag("-q,--quiet", args->quiet, "No summary; errors only");
     cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output");
+    addPropertyNamesOption(cmd, args->propertyPrefix);
     return [args]() {
         const auto limit = limitThreads(args->threads);
         return runMetric(*args);

@@ -36,6 +36,7 @@ struct SegmentArgs {
     double minArea = 0;
     int threads = 0;
     bool quiet = false, overwrite = false;
+    std::string propertyPrefix;  // --property-names
 };
 
 int runSegment(const SegmentArgs& args)
@@ -69,7 +70,7 @@ int runSegment(const SegmentArgs& args)
             << c.centroid.z << ',' << c.boxMin.x << ',' << c.boxMin.y << ',' << c.boxMin.z << ',' << c.boxMax.x
             << ',' << c.boxMax.y << ',' << c.boxMax.z << '\n';
 
-    VertexProperty label{"label", std::vector<float>(in.mesh.numVertices())};
+    VertexProperty label{"label", std::vector<float>(in.mesh.numVertices()), /*integer=*/true};
     for (std::size_t i = 0; i < label.values.size(); ++i) label.values[i] = float(result.label[i]);
     for (auto it = in.properties.begin(); it != in.properties.end(); ++it)
         if (it->name == "label") {
@@ -78,6 +79,7 @@ int runSegment(const SegmentArgs& args)
         }
     in.properties.push_back(std::move(label));
     WritePlyOptions plyOptions;
+    plyOptions.propertyPrefix = args.propertyPrefix;
     std::ostringstream comment;
     comment << "msii " << versionString() << " segment --property " << args.property << " --threshold "
             << args.threshold << (args.below ? " --below" : "") << " --min-vertices " << args.minVertices
@@ -85,6 +87,7 @@ int runSegment(const SegmentArgs& args)
     plyOptions.comments = in.comments;  // keep the provenance (e.g. compute's R and N)
     plyOptions.comments.push_back(comment.str());
     writeTextFileAtomic(table, csv.str());
+    qualityWithoutNaN(in.properties);
     writePly(output, in.mesh, in.properties, plyOptions);
     if (!args.quiet)
         std::fprintf(stderr, "msii: %s -> %s, %s (%zu components, %zu smaller ones dropped, %.1f s)\n",
@@ -169,6 +172,7 @@ std::function<int()> addSegmentCommand(CLI::App& app)
     cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
     cmd->add_flag("-q,--quiet", args->quiet, "No summary; errors only");
     cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs");
+    addPropertyNamesOption(cmd, args->propertyPrefix);
     return [args]() {
         const auto limit = limitThreads(args->threads);
         return runSegment(*args);

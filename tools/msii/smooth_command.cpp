@@ -32,6 +32,7 @@ struct SmoothArgs {
     bool allFeatures = false;
     int threads = 0;
     bool quiet = false, overwrite = false;
+    std::string propertyPrefix;  // --property-names
 };
 
 SmoothingOptions smoothingOptions(const SmoothArgs& args)
@@ -85,12 +86,14 @@ int runSmooth(const SmoothArgs& args)
     for (std::size_t k : chosen) smoother.smooth(in.properties[k].values, &progress);
 
     WritePlyOptions plyOptions;
+    plyOptions.propertyPrefix = args.propertyPrefix;
     std::ostringstream comment;
     comment << "msii " << versionString() << " smooth --filter " << args.filter << " --iterations "
             << args.iterations << " --delta " << args.delta << " (delta " << info.globalDelta
             << ") --weights " << args.weights << " --border " << args.border;
     plyOptions.comments = in.comments;  // keep the provenance (e.g. compute's R and N)
     plyOptions.comments.push_back(comment.str());
+    qualityWithoutNaN(in.properties);
     writePly(output, in.mesh, in.properties, plyOptions);
     if (!args.quiet)
         std::fprintf(stderr, "msii: %s -> %s (%zu vertices, %zu properties, %d x %s, %.1f s)\n",
@@ -130,6 +133,7 @@ std::function<int()> addSmoothCommand(CLI::App& app)
     cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
     cmd->add_flag("-q,--quiet", args->quiet, "No progress, no summary; errors only");
     cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output");
+    addPropertyNamesOption(cmd, args->propertyPrefix);
     return [args]() {
         const auto limit = limitThreads(args->threads);
         return runSmooth(*args);

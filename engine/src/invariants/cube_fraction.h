@@ -1,7 +1,7 @@
 #pragma once
 // Private to the engine: volume fractions of a unit voxel cut by a plane, the building block
 // of sub-voxel accuracy for occupancy (voxel ∩ solid) and for anti-aliased ball stencils
-// (voxel ∩ ball).
+// (voxel ∩ ball); docs/method.md, Occupancy and Stencils.
 #include <algorithm>
 #include <cmath>
 

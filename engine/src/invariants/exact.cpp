@@ -29,14 +29,15 @@ struct Measures {
 };
 
 // ---------------------------------------------------------------------------------------
-// Sector integrals (MSII-REFERENCE.md §1, exact identities). In the triangle's plane, with
-// the foot point c of p as origin, the triangle is the signed sum of the sectors (c, A, B)
-// of its directed edges, sign σ = sign((A − c) × (B − c)). Within one sector, polar
-// coordinates (s, φ) about c, φ measured from the perpendicular onto the edge's line
-// (distance e): the region is s <= m(φ) = min(ρ, e / cos φ), where the disc bounds it for
-// |φ| > φ* = arccos(e/ρ) (everywhere if e >= ρ) and the line elsewhere. A point of the
-// line at coordinate t along the edge (t = 0 at the perpendicular's foot) has tan φ = t/e,
-// so the pieces are split at t = ±t*, t* = sqrt(ρ² − e²), and integrated in closed form:
+// Sector integrals (docs/method.md, Exact identities and Per triangle). In the triangle's
+// plane, with the foot point c of p as origin, the triangle is the signed sum of the
+// sectors (c, A, B) of its directed edges, sign σ = sign((A − c) × (B − c)). Within one
+// sector, polar coordinates (s, φ) about c, φ measured from the perpendicular onto the
+// edge's line (distance e): the region is s <= m(φ) = min(ρ, e / cos φ), where the disc
+// bounds it for |φ| > φ* = arccos(e/ρ) (everywhere if e >= ρ) and the line elsewhere. A
+// point of the line at coordinate t along the edge (t = 0 at the perpendicular's foot) has
+// tan φ = t/e, so the pieces are split at t = ±t*, t* = sqrt(ρ² − e²), and integrated in
+// closed form:
 //   area  ∫∫ s ds dφ:            disc ½ρ²Δφ,  line ½e²Δ tan φ = ½eΔt;
 //   arc   d area / dρ:           disc ρΔφ,    line 0;
 //   solid ∫∫ d s/(d² + s²)^{3/2} ds dφ:  disc (sgn d − d/r)Δφ,
@@ -691,7 +692,8 @@ TriangleBallMeasures triangleBallMeasures(const Vec3& p, const Vec3& a, const Ve
 }
 
 // V of paper Eq. 1 and the four domains V, S, P, L of Eq. 2, normalised as in
-// MSII-REFERENCE.md §1, per vertex from sums over the triangles near it (identities: header).
+// docs/method.md, Definitions and normalisations; per vertex from sums over the triangles
+// near it (identities: header).
 ExactResult computeExact(const TriMesh& mesh, const ExactOptions& options, Progress* progress)
 {
     validate(mesh, options);

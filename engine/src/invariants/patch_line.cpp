@@ -398,22 +398,19 @@ using LineSpline = QuinticBSpline;
 /// How many knots each kernel reaches to either side.
 constexpr double kPatchHalfSupport = PatchSpline::kHalfSupport + 1;
 constexpr double kLineHalfSupport = LineSpline::kHalfSupport + 1;
-/// Knot spacing of P's kernel in cells of the level: one cell. P sums areas, so a sample's
-/// shape matters little (the plane's max P̂ error 9e-4), and the blur of P(r)'s kinks, where
-/// a sphere meets a crease, is what remains against the exact mode: on the tablet test P̂'s
-/// worst mean difference fell from 1.9e-3 (2 cells) to 7.7e-4 and its max from 2.2e-2 to
-/// 9.1e-3 (with the fit of interpolateFromSamples).
+/// Knot spacing of P's kernel in cells of the level: one cell (docs/method.md, Kernels). P
+/// sums areas, so a sample's shape matters little, and what remains against the exact mode
+/// is the blur of P(r)'s kinks, where a sphere meets a crease: the narrower the kernel, the
+/// less of it.
 constexpr double kPatchKernelCells = 1.0;
 /// Knot spacing of L's kernel in cells of the level: 1.25 cells, 1.5 on the finest level.
 /// L(r) has square-root onsets (a sphere becoming tangent to a facet, or meeting the
 /// bottom of a groove), and blurring them across r is what L̂ differs from the exact mode
-/// by, in proportion to the kernel's width. The quintic kernel is smooth enough for the
-/// samples' irregular shapes to average out at little more than a cell, where the cubic one
-/// (third derivative jumping at the knots) needed two. Narrower still, the shapes show
-/// through: with one cell the sphere's max |ΔL̂| is 2.7e-3 on level 1 and 6.6e-3 on the
-/// finest level (whose samples hold only a few triangle pieces each), over the 2e-3 of
-/// issue 3; with these spacings it is 1.4e-3, and the tablet's worst mean difference from
-/// the exact mode 2.7e-3 (3.6e-3 with the cubic kernel of two cells).
+/// by, in proportion to the kernel's width. L is a density, so its kernel must also be
+/// smooth and wide enough for the samples' irregular shapes to average out: the quintic
+/// kernel (C⁴) does that at little more than a cell, where the cubic one (third derivative
+/// jumping at the knots) would need two. Narrower still, the shapes show through, most on
+/// the finest level, whose samples hold only a few triangle pieces each.
 constexpr double kLineKernelCells = 1.25;
 constexpr double kLineKernelCellsFinest = 1.5;
 /// Histogram bins per cell. Linear sharing between bin centres blurs d by a tent of
@@ -772,7 +769,7 @@ constexpr double kDirectCellsPerSpacing = 1.2;
 /// numFields) to the points @p p with normals @p n (out[k·n + i]; points with @p skip set
 /// are left alone): a linear fit in the tangent plane (value and two slopes) over the
 /// samples within 2h on the point's side of the surface (kSameSide), weighted (1 −
-/// (d/2h)²)², so linear fields are reproduced. Where such samples do not span the plane
+/// (d/2h)²)⁸, so linear fields are reproduced. Where such samples do not span the plane
 /// (creases, corners), @p unresolved is set instead: those points are evaluated directly.
 /// Points go in groups of 2³ cells (of 4³, four fifths of the samples near a group lie
 /// beyond 2h of a point; of 2³, two thirds).
@@ -839,9 +836,8 @@ void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec
                                          2.0 * (nrm.x * nrm.y * t[3][k] + nrm.x * nrm.z * t[4][k] + nrm.y * nrm.z * t[5][k]);
                     if (agree < kSameSide) continue;
                     // (1 − q²)⁸ ≈ exp(−2 |d|²/h²): the fit leans on the samples within about
-                    // h/2, as P̂ and L̂ bend on a scale of h near creases; (1 − q²)² gave P̂'s
-                    // tablet max 1.4e-2 instead of 9.1e-3 (more vertices are evaluated where
-                    // they are: 9.0k instead of 4.9k of 124k there).
+                    // h/2, as P̂ and L̂ bend on a scale of h near creases (docs/method.md,
+                    // Where P and L are evaluated).
                     const double s2 = (1.0 - q2) * (1.0 - q2), s4 = s2 * s2;
                     const double wt = s4 * s4;
                     const std::array<double, 3> phi{1.0, dot(d, u) / h, dot(d, v) / h};
@@ -989,8 +985,8 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
         } else {
             // Far fewer samples than vertices (coarse levels of dense meshes): evaluate at the
             // samples (one per cell, on the surface) and interpolate to the vertices. P̂ and L̂
-            // vary on the scale of r >= 6h, so a linear fit over 2h loses about (h/r)²/8 of
-            // their variation.
+            // vary on the scale of r >= minCellsPerRadius·h, so a linear fit over 2h loses
+            // about (h/r)²/8 of their variation.
             std::vector<Vec3> at(numSamples);
             for (std::size_t s = 0; s < numSamples; ++s) at[s] = Vec3(level.cx[s], level.cy[s], level.cz[s]);
             evaluatePoints(level, kernel, h0, at, std::vector<char>(numSamples, 0), sumP, sumL, progress);

@@ -372,9 +372,10 @@ BendWeights secondDerivativeWeights(const std::vector<double>& radii, std::size_
 /// (h²/12)·(4Ŝ'/r + 3Ŝ''/2). Ŝ' is taken from V̂ across neighbouring radii (for Ŝ linear in
 /// r, V̂' = 3Ŝ'/4), which follows the surface at the scale of the ball whatever the grid
 /// (a curvature fitted within a voxel cell would not), and Ŝ'' from Ŝ across five
-/// neighbouring radii (secondDerivativeWeights; 0 on spheres, planes, edges and corners, but not where the sphere
-/// sweeps over relief: wedges, rims, tool marks). On a sphere of radius 10 at r = 4
-/// (6 voxels per radius) the bias is −7e-4 in V̂ and −9e-4 in Ŝ before this correction.
+/// neighbouring radii (secondDerivativeWeights; 0 on spheres, planes, edges and corners, but
+/// not where the sphere sweeps over relief: wedges, rims, tool marks). On a sphere of radius
+/// 10 at r = 4 (6 voxels per radius) the bias this removes is −7e-4 in V̂ and −9e-4 in Ŝ
+/// (docs/method.md, Smoothing-bias removal).
 void removeSmoothingBias(VolumeSphereResult& result, double h0)
 {
     const auto& radii = result.radii;

@@ -1,6 +1,7 @@
 #include <msii/io/feature_properties.h>
 
 #include <array>
+#include <cmath>
 #include <utility>
 
 namespace msii {
@@ -33,7 +34,21 @@ std::vector<VertexProperty> featureProperties(const Features& features)
             props.push_back({featureName(letter, j), (*columns)[j]});
         if (!quality) quality = columns;
     }
-    if (quality) props.push_back({"quality", quality->back()});
+    if (quality) {
+        const std::size_t nv = quality->back().size();
+        VertexProperty value{"quality", std::vector<float>(nv, 0.0f)};
+        VertexProperty count{"valid_radii", std::vector<float>(nv, 0.0f), /*integer=*/true};
+        for (std::size_t i = 0; i < nv; ++i) {
+            int valid = 0;
+            for (std::size_t j = quality->size(); j-- > 0;)
+                if (!std::isnan((*quality)[j][i])) {
+                    if (valid++ == 0) value.values[i] = (*quality)[j][i];
+                }
+            count.values[i] = float(valid);
+        }
+        props.push_back(std::move(value));
+        props.push_back(std::move(count));
+    }
     return props;
 }
 

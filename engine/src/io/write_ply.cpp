@@ -149,6 +149,12 @@ void validate(const std::string& path, const TriMesh& mesh, const std::vector<st
                                         std::to_string(n) + " vertices" + where);
 }
 
+/// An integer property's value as written: NaN (no value) becomes 0.
+inline std::int32_t wholeNumber(float v)
+{
+    return std::isnan(v) ? 0 : std::int32_t(std::lround(v));
+}
+
 char* putPoint(char* out, const Vec3& p, bool doublePoints)
 {
     if (doublePoints) {
@@ -167,8 +173,10 @@ void writePly(const std::string& path, const TriMesh& mesh,
               const std::vector<VertexProperty>& properties, const WritePlyOptions& options)
 {
     std::vector<std::string> names;
+    std::vector<bool> integer;
     for (const VertexProperty& property : properties) {
         names.push_back(property.name);
+        integer.push_back(property.integer);
         if (property.values.size() != mesh.numVertices())
             throw InvalidInputError("the vertex property '" + property.name + "' has " +
                                     std::to_string(property.values.size()) + " values for " +
@@ -182,7 +190,7 @@ void writePly(const std::string& path, const TriMesh& mesh,
     const bool hasList = options.listLength > 0;
     const std::size_t listLength = hasList ? std::size_t(options.listLength) : 0;
     const bool doublePoints = options.forceDoublePoints || needsDoublePoints(mesh.points);
-    const std::string header = plyHeader(mesh.numVertices(), mesh.numTriangles(), names, options, doublePoints);
+    const std::string header = plyHeader(mesh.numVertices(), mesh.numTriangles(), names, options, doublePoints, integer);
 
     // Outputs of many MB are written past the page cache (AtomicFile::Mode::Large).
     const std::size_t approximateBytes =
@@ -201,7 +209,8 @@ void writePly(const std::string& path, const TriMesh& mesh,
             char* out = buffer.data();
             for (std::size_t v = begin; v < end; ++v) {
                 out = putPoint(out, points[v], doublePoints);
-                for (const VertexProperty& property : properties) out = put(out, property.values[v]);
+                for (const VertexProperty& property : properties)
+                    out = property.integer ? put(out, wholeNumber(property.values[v])) : put(out, property.values[v]);
                 if (hasList) {
                     *out++ = char(std::uint8_t(listLength));
                     std::memcpy(out, list + v * listLength, listLength * sizeof(float));
@@ -223,9 +232,11 @@ void writePly(const std::string& path, const TriMesh& mesh,
                     if (doublePoints) appendNumber(buffer, p[k], sep);
                     else appendNumber(buffer, float(p[k]), sep);
                 }
-                for (std::size_t i = 0; i < properties.size(); ++i)
-                    appendNumber(buffer, properties[i].values[v],
-                                 (i + 1 == properties.size() && !hasList) ? '\n' : ' ');
+                for (std::size_t i = 0; i < properties.size(); ++i) {
+                    const char sep = (i + 1 == properties.size() && !hasList) ? '\n' : ' ';
+                    if (properties[i].integer) appendNumber(buffer, wholeNumber(properties[i].values[v]), sep);
+                    else appendNumber(buffer, properties[i].values[v], sep);
+                }
                 if (hasList) {
                     appendNumber(buffer, int(listLength), ' ');  // listLength > 0 here
                     for (std::size_t i = 0; i < listLength; ++i)
@@ -259,7 +270,7 @@ void formatPlyFaces(const Triangle* triangles, std::size_t count, std::vector<ch
 }
 
 std::string plyHeader(std::size_t numVertices, std::size_t numFaces, const std::vector<std::string>& propertyNames,
-                      const WritePlyOptions& options, bool doublePoints)
+                      const WritePlyOptions& options, bool doublePoints, const std::vector<bool>& integer)
 {
     const char* pointType = doublePoints ? "double" : "float";
     std::string header = "ply\nformat ";
@@ -267,7 +278,9 @@ std::string plyHeader(std::size_t numVertices, std::size_t numFaces, const std::
     for (const std::string& comment : options.comments) header += "comment " + oneLine(comment) + "\n";
     header += "element vertex " + std::to_string(numVertices) + "\n";
     for (const char* axis : {"x", "y", "z"}) header += std::string("property ") + pointType + " " + axis + "\n";
-    for (const std::string& name : propertyNames) header += "property float " + name + "\n";
+    for (std::size_t k = 0; k < propertyNames.size(); ++k)
+        header += std::string(k < integer.size() && integer[k] ? "property int " : "property float ") +
+                  options.propertyPrefix + propertyNames[k] + "\n";
     if (options.listLength > 0) header += "property list uchar float " + options.listName + "\n";
     header += "element face " + std::to_string(numFaces) + "\n";
     header += "property list uchar int vertex_indices\nend_header\n";
@@ -281,6 +294,7 @@ struct PlyPieceWriter::State {
     const TriMesh& mesh;
     AtomicFile file;
     std::size_t numProperties = 0, recordBytes = 0;
+    std::vector<PlyColumn> columns;
     std::uint64_t vertexOffset = 0;  // where the first vertex record starts
     bool doublePoints = false;
     std::vector<bool> written;
@@ -303,7 +317,10 @@ struct PlyPieceWriter::State {
             char* out = buffer.data();
             for (std::size_t k = i; k < end; ++k) {
                 out = putPoint(out, mesh.points[vertices[k]], doublePoints);
-                for (std::size_t c = 0; c < numProperties; ++c) out = put(out, value(c, k));
+                for (std::size_t c = 0; c < numProperties; ++c) {
+                    const float v = value(c, k);
+                    out = columns[c].integer ? put(out, wholeNumber(v)) : put(out, v);
+                }
             }
             file.writeAt(vertexOffset + std::uint64_t(vertices[i]) * recordBytes, buffer.data(), buffer.size());
             i = end;
@@ -311,9 +328,15 @@ struct PlyPieceWriter::State {
     }
 };
 
-PlyPieceWriter::PlyPieceWriter(const std::string& path, const TriMesh& mesh,
-                               const std::vector<std::string>& propertyNames, const WritePlyOptions& options)
+PlyPieceWriter::PlyPieceWriter(const std::string& path, const TriMesh& mesh, const std::vector<PlyColumn>& columns,
+                               const WritePlyOptions& options)
 {
+    std::vector<std::string> propertyNames;
+    std::vector<bool> integer;
+    for (const PlyColumn& c : columns) {
+        propertyNames.push_back(c.name);
+        integer.push_back(c.integer);
+    }
     if (!options.binary || options.listLength > 0)
         throw InvalidInputError("a PLY written in pieces is binary and has no list property; cannot write '" + path + "'.");
     validate(path, mesh, propertyNames, options);
@@ -321,9 +344,12 @@ PlyPieceWriter::PlyPieceWriter(const std::string& path, const TriMesh& mesh,
     mState = std::make_unique<State>(path, mesh);
     State& s = *mState;
     s.numProperties = propertyNames.size();
+    s.columns = columns;
     s.doublePoints = options.forceDoublePoints || needsDoublePoints(mesh.points);
     s.recordBytes = (s.doublePoints ? 3 * sizeof(double) : 3 * sizeof(float)) + s.numProperties * sizeof(float);
-    const std::string header = plyHeader(mesh.numVertices(), mesh.numTriangles(), propertyNames, options, s.doublePoints);
+    static_assert(sizeof(std::int32_t) == sizeof(float), "int and float properties take the same room");
+    const std::string header =
+        plyHeader(mesh.numVertices(), mesh.numTriangles(), propertyNames, options, s.doublePoints, integer);
     s.file.write(header);
     s.vertexOffset = header.size();
     s.written.assign(mesh.numVertices(), false);
@@ -360,8 +386,7 @@ void PlyPieceWriter::commit()
     std::vector<std::uint32_t> missing;
     for (std::size_t v = 0; v < s.written.size(); ++v)
         if (!s.written[v]) missing.push_back(std::uint32_t(v));
-    const float nan = std::numeric_limits<float>::quiet_NaN();
-    s.writeRecords(missing, [&](std::size_t, std::size_t) { return nan; });
+    s.writeRecords(missing, [&](std::size_t c, std::size_t) { return s.columns[c].missing; });
     s.file.commit();
 }
 

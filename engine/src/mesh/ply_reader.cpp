@@ -530,6 +530,19 @@ struct KeptList {
     std::vector<float> values;  ///< numVertices * length
 };
 
+/// The name a kept vertex property gets: without the prefix `scalar_` that CloudCompare
+/// gives every scalar field it saves (and msii writes with --property-names cloudcompare),
+/// unless another property of the element has that name already.
+std::string keptName(const PlyElement& element, const std::string& name)
+{
+    static const std::string prefix = "scalar_";
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) return name;
+    const std::string plain = name.substr(prefix.size());
+    for (const PlyProperty& other : element.properties)
+        if (other.name == plain) return name;
+    return plain;
+}
+
 /// What each vertex property feeds: a coordinate (0, 1, 2), a kept property (3 + index), a
 /// kept list (-2 - index), or nothing (-1).
 std::vector<int> vertexTargets(const PlyElement& element, const ReadMeshOptions& options,
@@ -544,7 +557,8 @@ std::vector<int> vertexTargets(const PlyElement& element, const ReadMeshOptions&
             else if (property.name == "z") target = 2;
             else if (options.keepVertexProperties) {
                 target = 3 + int(kept.size());
-                kept.push_back({property.name, std::vector<float>(element.count)});
+                const bool integer = property.type != PlyType::Float32 && property.type != PlyType::Float64;
+                kept.push_back({keptName(element, property.name), std::vector<float>(element.count), integer});
             }
         } else if (options.keepVertexLists) {
             target = -2 - int(lists.size());

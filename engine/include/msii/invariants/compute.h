@@ -70,7 +70,8 @@ double coarsestPrecision(const ComputeOptions& options);
 
 /// The automatic voxel size: fine enough that the first radius of at least 3 median edge
 /// lengths has r/h >= minVoxelsPerRadius, but not finer than half the median edge (the mesh
-/// holds no detail below that, and the level set's cost grows with its resolution).
+/// holds no detail below that, and the level set's cost grows with its resolution;
+/// docs/method.md, Voxel size).
 double chooseVoxelSize(double medianEdge, const std::vector<double>& radii,
                        double minVoxelsPerRadius);
 

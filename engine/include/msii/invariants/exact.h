@@ -1,7 +1,7 @@
 #pragma once
 /// @file exact.h
-/// @brief The exact reference mode: V, S, P and L (paper Eq. 1–2, MSII-REFERENCE.md §1) of
-/// a triangle mesh, computed in closed form from the triangles, with no grid or sampling.
+/// @brief The exact reference mode: V, S, P and L (paper Eq. 1–2; docs/method.md, Exact mode)
+/// of a triangle mesh, computed in closed form from the triangles, with no grid or sampling.
 /// Slow compared with the grid-based engine (invariants/volume_sphere.h, patch_line.h), but
 /// exact up to rounding for the mesh as given: the oracle the fast paths are measured
 /// against.

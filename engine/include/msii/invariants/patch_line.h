@@ -3,11 +3,11 @@
 /// @brief The patch-area (P) and intersection-line-length (L) integral invariants of paper
 /// Eq. 2 for all N nested radii, from a sampled surface.
 ///
-/// How (details in patch_line.cpp):
+/// How (details in patch_line.cpp; docs/method.md, Patch area and line length):
 /// 1. Samples: the triangles are cut into pieces no larger than the finest cell h0, and the
 ///    pieces are gathered per cell into one sample: area, centroid, covariance of position
 ///    and mean normal tensor. Coarser levels (cells 2h0, 4h0, ...) merge 2×2×2 cells exactly.
-/// 2. Each radius uses the level of the V/S plan (gridLevelOfRadius: r/h >= minCellsPerRadius),
+/// 2. Each radius uses the coarsest level with r/h >= minCellsPerRadius (gridLevelOfRadius),
 ///    except a coarsest level that would hold a single radius (patchLineLevelOfRadius).
 /// 3. Per point p and level, one pass over the samples within reach builds histograms over
 ///    the distance d = |x − p| of area, and of area·g with g = |∇_M d| = sqrt(1 − (û·n)²)
@@ -47,8 +47,9 @@ struct PatchLineOptions {
     /// Per-vertex distance to the nearest border (mesh/border_distance.h); empty = closed.
     /// Radius r_j of vertex i is masked (NaN) when r_j + max(4 w_j, 4 h_level) + 2 h_0 >
     /// borderDistance[i] (w_j the knot spacing of L's kernel, the wider, at most r_j/4): the
-    /// reach of the kernels, at least V and S's margin (so P and L are masked wherever V
-    /// and S are).
+    /// reach of the kernels. Each invariant is masked by its own reach, and P and L's levels
+    /// are finer than V and S's by default (4/3 of the precision), so P and L can have a
+    /// value at a radius where V and S are masked.
     std::vector<double> borderDistance;
     /// Decides, per level, where P and L are evaluated: at the vertices where the level's
     /// cells are no larger than this spacing, else at the samples (then fewer than the
@@ -71,12 +72,11 @@ struct PatchLineResult {
 };
 
 /// The sample level of each radius: gridLevelOfRadius, except that a coarsest level
-/// holding a single radius r joins the level below when that costs no more. Its own pass
-/// would reach about 1.8r (L's kernel knots 1.25 cells at r/h = 6) for one radius;
-/// extending the level below from the radius before reaches only a little further, on 4
-/// times as many points and samples, and halves the kernel there: with N = 16 radii this
-/// merges whenever the coarsest level holds R alone, the usual case (1.1M-vertex
-/// benchmark, tablet test).
+/// holding a single radius r joins the level below when that costs no more
+/// (docs/method.md, Sample levels). Its own pass would reach up to r + 5 of its cells (L's
+/// kernel knots 1.25 cells) for one radius; extending the level below from the radius before
+/// reaches only a little further, on 4 times as many points and samples, and halves the
+/// kernel there.
 std::vector<int> patchLineLevelOfRadius(const std::vector<double>& radii, double h0,
                                         double minCellsPerRadius);
 

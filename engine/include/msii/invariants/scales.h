@@ -14,7 +14,8 @@ std::vector<double> equidistantRadii(double largestRadius, int scales);
 void validateRadii(const std::vector<double>& radii);
 
 /// The grid level of each radius for grid-based invariants: radius r goes to the coarsest
-/// level l (cell edge h0·2^l) with r / (h0·2^l) >= minCellsPerRadius, level 0 if none.
+/// level l (cell edge h0·2^l) with r / (h0·2^l) >= minCellsPerRadius, level 0 if none
+/// (docs/method.md, Radii and grid levels).
 /// Errors of voxel and sample sums follow h/r, so this keeps them flat across scales while
 /// large radii stay cheap.
 std::vector<int> gridLevelOfRadius(const std::vector<double>& radii, double h0,
@@ -35,8 +36,9 @@ std::vector<int> volumeSphereLevels(const std::vector<double>& radii, double h0,
 /// r + max(4 h_l + 2 h0, min(r, 6 h_l) + (2 + √3) h_l + h0): V and S's stencils and
 /// interpolation reach r + 4 h_l + 2 h0; P and L's values come from samples within 2 h_l,
 /// whose kernels reach at most r + min(r, 6 h_l) (L's: r + 4w, w <= r/4 and 1.5 cells)
-/// over cells of extent √3·h_l (patch_line.h). Border distances are searched a little beyond this, and tiles' halos
-/// reach past it, so that a tile's own values are exactly those of the whole mesh.
+/// over cells of extent √3·h_l (patch_line.h). Border distances are searched a little
+/// beyond this, and tiles' halos reach past it, so that a tile's own values are exactly
+/// those of the whole mesh (docs/method.md, Tiling).
 double dependenceReach(const std::vector<double>& radii, double h0, double minCellsPerRadius);
 
 } // namespace msii

@@ -3,14 +3,15 @@
 /// @brief The volume (V) and sphere-area (S) integral invariants of paper Eq. 1–3 for all
 /// N nested radii, by convolving nested-ball stencils over the level set.
 ///
-/// How (details in volume_sphere.cpp):
+/// How (details in volume_sphere.cpp; docs/method.md, Volume and sphere area):
 /// 1. Occupancy: each voxel of the fine level set gets the fraction of its cube inside the
 ///    solid, exact for a plane through the voxel (cube/half-space volume from the distance
 ///    and its gradient) with a second-order correction for the surface's mean curvature.
 /// 2. Pyramid: coarser grids (voxel 2h, 4h, ...) by averaging 2×2×2 children, which keeps
 ///    occupancy exact as a volume fraction.
 /// 3. Each radius r_j is evaluated on the coarsest grid where r_j/h >= minVoxelsPerRadius,
-///    so cost and error stay flat across scales. There, fixed stencils at voxel centres:
+///    so cost and error stay flat across scales, R one level finer unless that level is the
+///    finest (volumeSphereLevels). There, fixed stencils at voxel centres:
 ///    anti-aliased ball weights (cube/ball fraction) for V, and for S = dV/dr the
 ///    difference of two such balls at r ± h/2. Both are normalised by the stencil's own sum,
 ///    so a full ball gives exactly 1 and a plane through a voxel centre exactly 1/2.
@@ -20,8 +21,8 @@
 ///    x·r, the centre's distance from the surface, is the vertex normal's plane plus a
 ///    curvature fitted to the centres' exact distances (capped at 0.5/r).
 /// 5. The voxel sums blur V̂ by a tent of variance h²/6 per axis; the resulting bias,
-///    (h²/12)·ΔV̂ = h²Ŝ'/(4r) for V and h²Ŝ'/(3r) for S, is removed with Ŝ' from the
-///    neighbouring radii.
+///    (h²/12)·ΔV̂ = h²Ŝ'/(4r) for V and (h²/12)(4Ŝ'/r + 3Ŝ''/2) for S, is removed with Ŝ'
+///    and Ŝ'' from the neighbouring radii.
 /// All radii of one level share one pass over each stencil.
 
 #include <msii/core/progress.h>

@@ -2,9 +2,14 @@
 /// @file feature_properties.h
 /// @brief The per-vertex features of `msii compute` as named output properties, the same
 /// for every writer: V_01 … V_NN, S_01 … S_NN, P_01 … P_NN, L_01 … L_NN (those computed,
-/// radius ascending, r_j = j·R/N), then `quality` = the value at the largest radius of the
-/// first invariant present in the order V, S, P, L (V_NN whenever V was computed). NaN marks
-/// a masked value.
+/// radius ascending, r_j = j·R/N; NaN marks a masked value), then
+/// - `quality`: the first invariant present in the order V, S, P, L (V whenever it was
+///   computed) at the largest radius at which the vertex has a value, 0 where it has none.
+///   Never NaN: viewers colour by quality without checking (MeshLab 2020.09 aborts on NaN),
+///   and near an open border the largest radii are masked first, so the largest valid radius
+///   keeps the border's vertices coloured by their own relief;
+/// - `valid_radii` (integer): at how many radii that invariant has a value at the vertex,
+///   N away from borders, 0 where `quality` is only a stand-in.
 
 #include <msii/invariants/patch_line.h>
 #include <msii/invariants/volume_sphere.h>
@@ -35,7 +40,8 @@ std::vector<VertexProperty> featureProperties(const Features& features);
 /// The name of feature j (0-based) of invariant @p letter: "V_07" (two digits at least).
 std::string featureName(char letter, std::size_t j);
 
-/// Which property `quality` holds, e.g. "V_16", for the documentation of outputs.
+/// Which invariant `quality` comes from, e.g. "V_16" (its largest radius), for the
+/// documentation of outputs.
 std::string qualitySource(const Features& features);
 
 } // namespace msii

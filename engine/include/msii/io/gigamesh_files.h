@@ -4,7 +4,7 @@
 /// ASCII `.mat` tables and a PLY with a per-vertex `feature_vector` list, so results can be
 /// compared with GigaMesh's and features computed by GigaMesh can be used by msii.
 ///
-/// Conventions (MSII-REFERENCE.md §5), and how msii maps onto them:
+/// Conventions (docs/method.md, GigaMesh conventions), and how msii maps onto them:
 /// - GigaMesh writes V and P only, radii **largest first**: element i is at r·(1 − i/N),
 ///   i = 0..N−1. msii stores columns radius ascending (r_j = j·R/N, j = 1..N), so element i
 ///   of a GigaMesh row is msii column N−1−i.

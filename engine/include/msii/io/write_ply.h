@@ -6,6 +6,7 @@
 #include <msii/mesh/trimesh.h>
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -18,6 +19,10 @@ struct WritePlyOptions {
     /// the bounding box (large offsets, e.g. terrain in map coordinates), or forced here.
     bool forceDoublePoints = false;
     std::vector<std::string> comments;   ///< "comment ..." header lines
+    /// Put before every scalar vertex property's name (not x, y, z, not the list), e.g.
+    /// "scalar_": CloudCompare's command line loads a PLY's vertex properties as scalar
+    /// fields only when they are named `scalar_<name>`.
+    std::string propertyPrefix;
     /// Optional per-vertex list property `property list uchar float <listName>` written
     /// after the scalar properties: listValues holds numVertices() * listLength floats.
     std::string listName;
@@ -25,18 +30,27 @@ struct WritePlyOptions {
     std::vector<float> listValues;
 };
 
-/// Vertices as x, y, z (float or double, see options), then each property of @p properties (float) in order, then
-/// the optional list; faces as `property list uchar int vertex_indices`.
+/// Vertices as x, y, z (float or double, see options), then each property of @p properties in
+/// order (float, or int where VertexProperty::integer; NaN becomes 0 there), then the optional list; faces as `property list uchar int vertex_indices`.
 /// @throw IOError if the file cannot be written; InvalidInputError if a property has the
 ///        wrong number of values.
 void writePly(const std::string& path, const TriMesh& mesh,
               const std::vector<VertexProperty>& properties, const WritePlyOptions& options = {});
 
 /// The header writePly writes for a mesh of @p numVertices and @p numFaces with float
-/// properties @p propertyNames (and options' list), x, y, z as double if @p doublePoints;
-/// for writers that stream a mesh they never hold (e.g. generated samples).
+/// properties @p propertyNames (int where @p integer says so; empty: all float) and options'
+/// list, x, y, z as double if @p doublePoints; for writers that stream a mesh they never hold
+/// (e.g. generated samples).
 std::string plyHeader(std::size_t numVertices, std::size_t numFaces, const std::vector<std::string>& propertyNames,
-                      const WritePlyOptions& options, bool doublePoints);
+                      const WritePlyOptions& options, bool doublePoints, const std::vector<bool>& integer = {});
+
+/// A vertex property of a PLY written in pieces.
+struct PlyColumn {
+    std::string name;
+    bool integer = false;  ///< written as int
+    /// Written for the vertices no piece gave (e.g. `quality`, which is never NaN, gives 0).
+    float missing = std::numeric_limits<float>::quiet_NaN();
+};
 
 /// Bytes of one binary face record (`property list uchar int vertex_indices` of a triangle).
 constexpr std::size_t kPlyFaceBytes = 1 + 3 * sizeof(std::int32_t);
@@ -47,13 +61,14 @@ void formatPlyFaces(const Triangle* triangles, std::size_t count, std::vector<ch
 
 /// A binary PLY written in pieces, for results larger than memory (the tiled compute): the
 /// header and the faces are written at once, the vertex records as their values arrive, in
-/// any order, straight to their place in the file. Vertices never given get NaN values. The
+/// any order, straight to their place in the file. Vertices never given get each column's
+/// `missing` value. The
 /// file is byte for byte what writePly writes for the same mesh and values (binary, no list
 /// property) and appears only on commit(). Holds one bit per vertex, not the values.
 class PlyPieceWriter {
 public:
     /// @throw IOError if the file cannot be created; InvalidInputError as writePly.
-    PlyPieceWriter(const std::string& path, const TriMesh& mesh, const std::vector<std::string>& propertyNames,
+    PlyPieceWriter(const std::string& path, const TriMesh& mesh, const std::vector<PlyColumn>& columns,
                    const WritePlyOptions& options = {});
     ~PlyPieceWriter();
     PlyPieceWriter(const PlyPieceWriter&) = delete;
@@ -63,7 +78,8 @@ public:
     /// writes fastest): property k of vertices[i] is columns[k][i].
     /// @throw InvalidInputError for a vertex out of range or a wrong number of columns.
     void write(const std::vector<std::uint32_t>& vertices, const std::vector<const float*>& columns);
-    /// Fills the vertices not written with NaN, then renames onto the target. @throw IOError
+    /// Fills the vertices not written with the columns' `missing` values, then renames onto
+    /// the target. @throw IOError
     void commit();
 
 private:

@@ -1,8 +1,9 @@
 #pragma once
 /// @file levelset.h
 /// @brief The mesh as a narrow-band signed distance field (OpenVDB), the first stage of the
-/// V and S computation. OpenVDB types stay behind this header (pimpl) so that including it
-/// is cheap; engine code that needs the grid includes src/levelset/levelset_impl.h.
+/// V and S computation (docs/method.md, Level set). OpenVDB types stay behind this header
+/// (pimpl) so that including it is cheap; engine code that needs the grid includes
+/// src/levelset/levelset_impl.h.
 ///
 /// Sign convention: negative inside the solid, positive outside. The solid is what the
 /// triangles' normals point away from (counter-clockwise seen from outside):

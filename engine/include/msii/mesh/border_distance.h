@@ -1,7 +1,8 @@
 #pragma once
 /// @file border_distance.h
 /// @brief Euclidean distance from every vertex to the nearest border edge of an open mesh,
-/// used to mask the radii whose ball reaches a border or a hole.
+/// used to mask the radii whose ball reaches a border or a hole (docs/method.md, Border
+/// masks).
 
 #include <msii/mesh/trimesh.h>
 

@@ -68,7 +68,8 @@ struct PrepareMeshResult {
 PrepareMeshResult prepareMesh(const TriMesh& input, const PrepareMeshOptions& options = {});
 
 /// The default hole size for a largest radius R: loops of at most πR, the perimeter of a
-/// disc of diameter R, i.e. holes that fit well inside the largest ball (docs/method.md).
+/// disc of diameter R, i.e. holes that fit well inside the largest ball (docs/method.md,
+/// Hole filling).
 double defaultMaxHolePerimeter(double radius);
 
 /// A per-vertex column of the prepared mesh mapped to the input's vertices (NaN for

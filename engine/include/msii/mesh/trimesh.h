@@ -29,6 +29,9 @@ struct TriMesh {
 struct VertexProperty {
     std::string name;
     std::vector<float> values;
+    /// Whole numbers (labels, counts), written to PLY as `int`; read back as such from any
+    /// PLY integer type. Values up to 2^24 are exact in float.
+    bool integer = false;
 };
 
 } // namespace msii

@@ -3,7 +3,7 @@
 /// @brief One scalar f(p_i) per vertex from its feature vectors (paper §3.1, Eq. 4–11):
 /// distances to a reference vector o (p-norms, weighted or not, the Mahalanobis-inspired
 /// form) and similarities (cosine, correlation, auto-correlation, Tanimoto), plus the
-/// normalised Euclidean distance.
+/// normalised Euclidean distance (docs/method.md, Feature vectors and metrics).
 ///
 /// Conventions (the values msii compute writes, radius ascending r_j = j·R/n):
 /// V/|B|, S/(4πr²): flat surface 0.5;  P/(πr²), L/(2πr): flat surface 1.

@@ -2,7 +2,8 @@
 /// @file ring_smoothing.h
 /// @brief Fast 1-ring smoothing of a per-vertex function (paper §3.2, Eq. 12–17): mean or
 /// area-weighted median over the geodesic disc of radius Δmin around each vertex, applied
-/// k times (the paper's examples: 30) to act like a larger filter.
+/// k times (the paper's examples: 30) to act like a larger filter (docs/method.md, 1-ring
+/// smoothing).
 ///
 /// For vertex p0 with value f0 and each incident triangle (p0, p_i, p_{i+1}):
 /// - f'_i = f0 + Δ (f_i − f0)/|p_i − p0| (Eq. 13): the value at distance Δ along the edge;

@@ -4,8 +4,9 @@
 /// (a grid over its two longest extents), each tile is computed on its own together with a
 /// halo of the triangles that its vertices' balls and border tests can reach, and the values
 /// of each tile's own vertices are merged. With the voxel size of the whole mesh and a halo
-/// of max(2R, R + 4 h_coarsest + 2 h_0) + 2 h_0, every value depends only on triangles inside
-/// the tile with its halo, so the merged result equals the untiled one.
+/// of the dependence reach plus 4 h_0 (invariants/scales.h), every value depends only on
+/// triangles inside the tile with its halo, so the merged result equals the untiled one bit
+/// for bit (docs/method.md, Tiling).
 
 #include <msii/core/progress.h>
 #include <msii/invariants/compute.h>
@@ -33,8 +34,9 @@ struct TilingOptions {
 /// computeTiled cuts it.
 std::vector<int> tileOfVertices(const TriMesh& mesh, int tilesPerAxis);
 
-/// Peak bytes per vertex of one computation at N = 16 with all four invariants (measured:
-/// 1.8 GB for 1.1M vertices), used to size tiles.
+/// Peak bytes per vertex of one computation at N = 16 with all four invariants, used to size
+/// tiles: a little above the peak memory per vertex of the 1.1M-vertex benchmark
+/// (docs/performance.md), so that a tile sized by it fits its budget.
 constexpr double kBytesPerTileVertex = 1700.0;
 
 struct TiledComputeInfo {
