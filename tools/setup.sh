@@ -19,6 +19,7 @@ packages=(
   build-essential cmake pkg-config
   libopenvdb-dev libboost-iostreams-dev libblosc-dev
   libopenmesh-dev libopenexr-dev libtbb-dev libpng-dev
+  libfreetype-dev libfontconfig-dev fonts-dejavu-core
   libcgal-dev libeigen3-dev
   libcli11-dev nlohmann-json3-dev
   libgtest-dev

@@ -126,8 +126,8 @@ TEST(MsiiCli, ComputeWritesFeaturesAndSidecar)
     for (float v : res.vertexProperties[0].values) (std::isnan(v) ? masked : finite)++;
     EXPECT_GT(finite, 0u);
     EXPECT_GT(masked, 0u);
-    // quality is never NaN (MeshLab aborts on it): V at the largest radius with a value, 0
-    // where none has one; valid_radii, an int property, counts those radii.
+    // quality is never NaN (MeshLab aborts on it): V at the largest radius with a value, a
+    // plane's 1/2 where none has one; valid_radii, an int property, counts those radii.
     EXPECT_FALSE(res.vertexProperties[16].integer);
     EXPECT_TRUE(res.vertexProperties[17].integer);
     EXPECT_NE(readFile(out.string()).find("property int valid_radii\n"), std::string::npos);
@@ -137,7 +137,7 @@ TEST(MsiiCli, ComputeWritesFeaturesAndSidecar)
         const float count = res.vertexProperties[17].values[i];
         ASSERT_FALSE(std::isnan(quality)) << "vertex " << i;
         int valid = 0;
-        float largest = 0;
+        float largest = 0.5f;
         for (std::size_t j = 0; j < 4; ++j)
             if (!std::isnan(res.vertexProperties[j].values[i])) ++valid, largest = res.vertexProperties[j].values[i];
         EXPECT_EQ(count, float(valid)) << "vertex " << i;

@@ -512,6 +512,32 @@ TEST(MsiiMapsCli, RenderPicturesFromFeaturesAndFromMap)
 }
 
 // 3. Components: labels in the PLY, one CSV row per label, areas positive and decreasing.
+// Without any font (fontconfig configured with none), pictures still come, with the built-in
+// pixel font and one warning that says how to get a real one.
+TEST(MsiiMapsCli, RenderWithoutFontsFallsBackWithAWarning)
+{
+    const fs::path conf = tempDir() / "no-fonts.conf", out = tempDir() / "no-fonts.png";
+    writeFile(conf.string(), "<?xml version=\"1.0\"?>\n<fontconfig></fontconfig>\n");
+    ::setenv("FONTCONFIG_FILE", conf.c_str(), 1);
+    const RunResult r = runMsii("render " + quoted(features()) + " --pixels 200 --overwrite -o " + quoted(out));
+    ::unsetenv("FONTCONFIG_FILE");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("msii: warning: no font found (install fonts-dejavu-core"), std::string::npos) << r.err;
+    const RgbImage picture = readPng(out.string());
+    EXPECT_GT(picture.width, 200);
+    // The built-in font has no grey: every pixel of the bottom margin's label is black or white.
+    std::size_t ink = 0, grey = 0;
+    for (int y = picture.height - 20; y < picture.height; ++y)
+        for (int x = 0; x < picture.width / 2; ++x) {
+            const Rgb8 c = picture.at(x, y);
+            if (c[0] == 255 && c[1] == 255 && c[2] == 255) continue;
+            ++ink;
+            grey += c[0] != 0;
+        }
+    EXPECT_GT(ink, 10u);
+    EXPECT_EQ(grey, 0u);
+}
+
 TEST(MsiiMapsCli, SegmentLabelsAgreeWithTable)
 {
     const ReadMeshResult in = readWithProperties(features());
@@ -658,6 +684,7 @@ TEST(MsiiMapsCli, BadInputFailsCleanly)
     const std::string r = f + " --pixels 200";
     expectCleanFailureOf("render", r + " --show nosuch", ".png", "no vertex property 'nosuch'");
     expectCleanFailureOf("render", r + " --range 2,1", ".png", "--range");
+    expectCleanFailureOf("render", r + " --font " + quoted(junk), ".png", "not a font");
     expectCleanFailureOf("render", r + " --percentiles 50", ".png", "--percentiles");
     expectCleanFailureOf("render", r + " --isolines -1", ".png", "--isolines");
     expectCleanFailureOf("render", r + " --light 1", ".png", "--light");

@@ -24,6 +24,7 @@
 #include <msii/map/feature_map.h>
 #include <msii/tiling/tiled_compute.h>
 #include <msii/render/annotate.h>
+#include <msii/render/typeface.h>
 #include <msii/render/picture.h>
 
 #include <CLI/CLI.hpp>
@@ -401,6 +402,9 @@ int main(int argc, char** argv)
             po.isolineCount = 5;
             const PictureResult pic = renderPicture(pc, po);
             FigureOptions fig;
+            static const FontResult font = findFont();  // as msii render: DejaVu Sans if installed
+            if (!font.typeface.isBuiltIn()) fig.typeface = &font.typeface;
+            fig.lineHeight = labelLineHeight(pic.image.height);
             fig.range = pic.range;
             fig.isolines = pic.isolineLevels;
             fig.pixelSize = pictureFrame.pixelSize;

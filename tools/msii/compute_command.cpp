@@ -313,7 +313,8 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                 << "; V_jj = V/|B_r|, S_jj = S/(4 pi r^2) (plane 0.5), P_jj = P/(pi r^2), L_jj = "
                    "L/(2 pi r) (plane 1), r_j = j*R/N; NaN = ball reaches the border"
                 << (args.exact ? " or vertex not computed" : "") << "; quality = " << qualityName.substr(0, 1)
-                << " at the largest radius with a value (0 if none), valid_radii = how many radii have one";
+                << " at the largest radius with a value (a plane's value if none), valid_radii = how many "
+                   "radii have one";
         plyOptions.comments.push_back(comment.str());
         plyOptions.propertyPrefix = args.propertyPrefix;
         if (args.tile >= 0)  // read by msii merge
@@ -359,13 +360,15 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                     std::vector<const float*> columns;
                     for (const VertexProperty& p : props) columns.push_back(p.values.data());
                     if (!pieces) {
-                        // Vertices in no tile (in no face) get NaN features, and quality and
-                        // valid_radii 0, as in writePly's output.
+                        // Vertices in no tile (in no face) get NaN features, quality's stand-in
+                        // and valid_radii 0, as in writePly's output.
+                        const float standIn = qualityStandIn(featuresOf(part.values.invariants, part.values.patchLine));
                         std::vector<PlyColumn> names;
                         for (const VertexProperty& p : props)
                             names.push_back({p.name, p.integer,
-                                             p.integer || p.name == "quality" ? 0.0f
-                                                                              : std::numeric_limits<float>::quiet_NaN()});
+                                             p.integer                ? 0.0f
+                                             : p.name == "quality"    ? standIn
+                                                                      : std::numeric_limits<float>::quiet_NaN()});
                         pieces = std::make_unique<PlyPieceWriter>(output, read.mesh, names, plyOptionsFor(part.values));
                     }
                     if (!vertices.empty()) pieces->write(vertices, columns);
@@ -465,7 +468,10 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                         {"P", "P/(pi r^2), flat plane 1"},
                         {"L", "L/(2 pi r), flat plane 1"},
                         {"order", "radius ascending: V_01 = r_1 = R/N ... V_NN = R"},
-                        {"quality", qualityName + " (the first of V, S, P, L computed, at the largest radius)"},
+                        {"quality", qualityName.substr(0, 1) +
+                                        " (the first of V, S, P, L computed) at the largest radius with a value; "
+                                        "a plane's value (V, S 0.5; P, L 1) where none has one; never NaN"},
+                        {"valid_radii", "how many radii have a value of the quality's invariant (0 to N)"},
                         {"masked", args.exact ? "NaN where the ball reaches a mesh border, and at vertices not computed"
                                               : "NaN where the ball of that radius reaches a mesh border"}};
     const auto& st = result.stats;

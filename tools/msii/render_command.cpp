@@ -10,6 +10,7 @@
 #include <msii/map/feature_map.h>
 #include <msii/map/rasterize.h>
 #include <msii/render/annotate.h>
+#include <msii/render/typeface.h>
 #include <msii/render/picture.h>
 
 #include <algorithm>
@@ -43,6 +44,7 @@ struct RenderArgs {
     double shadeStrength = 0.6;
     bool noColorBar = false, noScaleBar = false;
     std::string units;
+    std::string font;  // --font: a TrueType/OpenType file; empty: MSII_FONT, then fontconfig
     int threads = 0;
     bool quiet = false, overwrite = false;
 };
@@ -187,6 +189,19 @@ int runRender(const RenderArgs& args)
     const PictureResult picture = renderPicture(pc, options);
 
     FigureOptions figure;
+    FontResult font;
+    if (!args.noColorBar || !args.noScaleBar) {
+        FontOptions fo;
+        fo.file = args.font;
+        font = findFont(fo);
+        if (!font.warning.empty() && !args.quiet) std::fprintf(stderr, "msii: warning: %s\n", font.warning.c_str());
+        if (!font.typeface.isBuiltIn()) {
+            figure.typeface = &font.typeface;
+            figure.lineHeight = labelLineHeight(picture.image.height);
+        } else {
+            figure.fontScale = std::max(1, labelLineHeight(picture.image.height) / 9);
+        }
+    }
     figure.colorBar = options.colour && !args.noColorBar;
     figure.colorMap = options.colorMap;
     figure.range = picture.range;
@@ -241,6 +256,9 @@ std::function<int()> addRenderCommand(CLI::App& app)
     cmd->add_flag("--no-colorbar", args->noColorBar, "No colour bar");
     cmd->add_flag("--no-scalebar", args->noScaleBar, "No scale bar");
     cmd->add_option("--units", args->units, "Units for the scale bar (default mm, or the map's)");
+    cmd->add_option("--font", args->font,
+                    "Font file (TrueType/OpenType) for the labels (default: environment MSII_FONT, then "
+                    "DejaVu Sans through fontconfig, else a built-in pixel font with a warning)");
     addViewOptions(cmd, args->view, kDefaultPixels);
     cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
     cmd->add_flag("-q,--quiet", args->quiet, "No progress, no summary; errors only");

@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 namespace msii {
@@ -36,7 +37,7 @@ std::vector<VertexProperty> featureProperties(const Features& features)
     }
     if (quality) {
         const std::size_t nv = quality->back().size();
-        VertexProperty value{"quality", std::vector<float>(nv, 0.0f)};
+        VertexProperty value{"quality", std::vector<float>(nv, qualityStandIn(features))};
         VertexProperty count{"valid_radii", std::vector<float>(nv, 0.0f), /*integer=*/true};
         for (std::size_t i = 0; i < nv; ++i) {
             int valid = 0;
@@ -50,6 +51,13 @@ std::vector<VertexProperty> featureProperties(const Features& features)
         props.push_back(std::move(count));
     }
     return props;
+}
+
+float qualityStandIn(const Features& features)
+{
+    for (const auto& [letter, columns] : ordered(features))
+        if (columns && !columns->empty()) return letter == 'V' || letter == 'S' ? 0.5f : 1.0f;
+    return std::numeric_limits<float>::quiet_NaN();
 }
 
 std::string qualitySource(const Features& features)

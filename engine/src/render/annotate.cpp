@@ -99,6 +99,23 @@ std::string formatScientific(double value, double step)
     return stripFractionZeros(text.substr(0, ePos)) + text.substr(ePos);
 }
 
+/// Sets labels in the figure's typeface, or in the built-in font at the figure's scale.
+struct Pen {
+    const Typeface* typeface;
+    int lineHeight;  // with a typeface
+    int scale;       // built-in font
+    int height() const { return typeface ? lineHeight : textHeight(scale); }
+    int width(const std::string& text) const
+    {
+        return typeface ? typeface->textWidth(text, lineHeight) : textWidth(text, scale);
+    }
+    void draw(RgbImage& image, int x, int y, const std::string& text) const
+    {
+        if (typeface) typeface->drawText(image, x, y, text, kBlack, lineHeight);
+        else drawText(image, x, y, text, kBlack, scale);
+    }
+};
+
 } // namespace
 
 std::vector<double> niceTicks(double lo, double hi, int count)
@@ -157,6 +174,9 @@ RgbImage composeFigure(const RgbImage& picture, const FigureOptions& options)
     if (options.fontScale < 1)
         throw InvalidInputError("the font scale must be at least 1 (got " +
                                 std::to_string(options.fontScale) + ").");
+    if (options.typeface && options.lineHeight < 6)
+        throw InvalidInputError("the labels' line height must be at least 6 pixels (got " +
+                                std::to_string(options.lineHeight) + ").");
     const ValueRange range = options.range;
     if (options.colorBar &&
         !(std::isfinite(range.lo) && std::isfinite(range.hi) && range.hi > range.lo))
@@ -164,9 +184,10 @@ RgbImage composeFigure(const RgbImage& picture, const FigureOptions& options)
     if (options.scaleBar && !std::isfinite(options.pixelSize))
         throw InvalidInputError("the pixel size for the scale bar must be finite.");
 
-    const int s = options.fontScale;
+    const int s = options.typeface ? std::max(1, options.lineHeight / 9) : options.fontScale;
+    const Pen pen{options.typeface, options.lineHeight, s};
     const int pad = 6 * s;
-    const int th = textHeight(s);
+    const int th = pen.height();
     const int w = picture.width, h = picture.height;
 
     // --- colour bar layout ---
@@ -183,13 +204,13 @@ RgbImage composeFigure(const RgbImage& picture, const FigureOptions& options)
         int labelWidth = 0;
         for (double v : ticks) {
             tickLabels.push_back(formatTick(v, step));
-            labelWidth = std::max(labelWidth, textWidth(tickLabels.back(), s));
+            labelWidth = std::max(labelWidth, pen.width(tickLabels.back()));
         }
         right = barX + barW + 1 + tickLen + 2 * s + labelWidth + pad;
         const int topRoom = options.label.empty() ? pad + th / 2 : pad + th + pad;
         barTop = std::max(topRoom, (h - barH) / 2);
         if (!options.label.empty()) {
-            const int lw = textWidth(options.label, s);
+            const int lw = pen.width(options.label);
             const int lx = std::max(w + pad, barX + barW / 2 - lw / 2);
             right = std::max(right, lx + lw + pad);
         }
@@ -209,7 +230,7 @@ RgbImage composeFigure(const RgbImage& picture, const FigureOptions& options)
         scaleLabel = formatTick(scaleLength, scaleLength);
         if (!options.units.empty()) scaleLabel += " " + options.units;
         bottom = contentH + pad + scaleThick + 2 * s + th + pad;
-        right = std::max({right, pad + scalePixels + pad, pad + textWidth(scaleLabel, s) + pad});
+        right = std::max({right, pad + scalePixels + pad, pad + pen.width(scaleLabel) + pad});
     }
 
     RgbImage out(right, bottom, kWhite);
@@ -237,7 +258,7 @@ RgbImage composeFigure(const RgbImage& picture, const FigureOptions& options)
         for (std::size_t i = 0; i < ticks.size(); ++i) {
             const int row = rowOf(ticks[i]);
             fillRect(out, tickX, row, tickX + tickLen, row + 1, kBlack);
-            drawText(out, tickX + tickLen + 2 * s, row - th / 2, tickLabels[i], kBlack, s);
+            pen.draw(out, tickX + tickLen + 2 * s, row - th / 2, tickLabels[i]);
         }
         for (double level : options.isolines) {
             if (!std::isfinite(level) || level < range.lo || level > range.hi) continue;
@@ -245,18 +266,18 @@ RgbImage composeFigure(const RgbImage& picture, const FigureOptions& options)
             fillRect(out, barX - 1 - tickLen, row, barX + barW, row + 1, kBlack);
         }
         if (!options.label.empty()) {
-            const int lw = textWidth(options.label, s);
+            const int lw = pen.width(options.label);
             const int lx = std::max(w + pad, barX + barW / 2 - lw / 2);
-            drawText(out, lx, barTop - pad - th, options.label, kBlack, s);
+            pen.draw(out, lx, barTop - pad - th, options.label);
         }
     }
 
     if (withScale) {
         const int y0 = contentH + pad;
         fillRect(out, pad, y0, pad + scalePixels, y0 + scaleThick, kBlack);
-        const int lw = textWidth(scaleLabel, s);
+        const int lw = pen.width(scaleLabel);
         const int lx = std::max(0, pad + scalePixels / 2 - lw / 2);
-        drawText(out, lx, y0 + scaleThick + 2 * s, scaleLabel, kBlack, s);
+        pen.draw(out, lx, y0 + scaleThick + 2 * s, scaleLabel);
     }
     return out;
 }

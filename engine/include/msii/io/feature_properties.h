@@ -4,10 +4,12 @@
 /// for every writer: V_01 … V_NN, S_01 … S_NN, P_01 … P_NN, L_01 … L_NN (those computed,
 /// radius ascending, r_j = j·R/N; NaN marks a masked value), then
 /// - `quality`: the first invariant present in the order V, S, P, L (V whenever it was
-///   computed) at the largest radius at which the vertex has a value, 0 where it has none.
-///   Never NaN: viewers colour by quality without checking (MeshLab 2020.09 aborts on NaN),
-///   and near an open border the largest radii are masked first, so the largest valid radius
-///   keeps the border's vertices coloured by their own relief;
+///   computed) at the largest radius at which the vertex has a value; where it has none, the
+///   value of a plane (qualityStandIn: 1/2 for V and S, 1 for P and L). Never NaN: viewers
+///   colour by quality without checking (MeshLab 2020.09 aborts on NaN). Near an open border
+///   the largest radii are masked first, so the largest valid radius keeps the border's
+///   vertices coloured by their own relief, and the plane's value keeps vertices without any
+///   value from stretching a colour scale fitted to percentiles;
 /// - `valid_radii` (integer): at how many radii that invariant has a value at the vertex,
 ///   N away from borders, 0 where `quality` is only a stand-in.
 
@@ -39,6 +41,10 @@ std::vector<VertexProperty> featureProperties(const Features& features);
 
 /// The name of feature j (0-based) of invariant @p letter: "V_07" (two digits at least).
 std::string featureName(char letter, std::size_t j);
+
+/// The value `quality` holds at a vertex where its invariant has no value at any radius:
+/// that of a plane through the vertex (V̂ = Ŝ = 1/2, P̂ = L̂ = 1); NaN if nothing was computed.
+float qualityStandIn(const Features& features);
 
 /// Which invariant `quality` comes from, e.g. "V_16" (its largest radius), for the
 /// documentation of outputs.

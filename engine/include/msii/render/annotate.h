@@ -5,6 +5,7 @@
 
 #include <msii/render/colormap.h>
 #include <msii/render/image.h>
+#include <msii/render/typeface.h>
 
 #include <string>
 #include <vector>
@@ -21,6 +22,11 @@ struct FigureOptions {
     double pixelSize = 0;          ///< mesh units per picture pixel; <= 0: no scale bar
     std::string units = "mm";      ///< written after the scale bar's length
     int fontScale = 2;             ///< font pixel size (the 5×7 font), >= 1
+    /// The labels' typeface (render/typeface.h); null: the built-in 5×7 font at fontScale.
+    /// With a typeface, labels are lineHeight pixels high and the bars, ticks and margins
+    /// are scaled to match (fontScale is then lineHeight / 9).
+    const Typeface* typeface = nullptr;
+    int lineHeight = 18;           ///< with a typeface: label line height in pixels, >= 6
 };
 
 /// Returns a new image: @p picture with a margin at the right holding the colour bar (height
