@@ -10,6 +10,8 @@
 /// It also times the exact mode (--exact): on a block of the tablet's vertices, and on every
 /// vertex of a closed slab whose walls and bottom are a few long triangles.
 #include <msii/core/stopwatch.h>
+#include <msii/core/version.h>
+#include <msii/io/atomic_file.h>
 #include <msii/invariants/compute.h>
 #include <msii/invariants/exact.h>
 #include <msii/invariants/scales.h>
@@ -37,6 +39,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdarg>
+#include <ctime>
 #include <cstdio>
 #include <cstring>
 #include <limits>
@@ -85,6 +89,67 @@ ChildRun runChild(const std::vector<std::string>& args)
     return r;
 }
 
+/// What the benchmark prints, kept as well: `msii-benchmark --markdown FILE` writes it into
+/// the performance page.
+struct Report {
+    std::string text;
+    __attribute__((format(printf, 2, 3))) void print(const char* format, ...)
+    {
+        char buffer[1024];
+        va_list args;
+        va_start(args, format);
+        std::vsnprintf(buffer, sizeof(buffer), format, args);
+        va_end(args);
+        std::fputs(buffer, stdout);
+        text += buffer;
+    }
+};
+
+std::string todayUtc()
+{
+    const std::time_t now = std::time(nullptr);
+    char text[32];
+    std::strftime(text, sizeof(text), "%Y-%m-%d", std::gmtime(&now));
+    return text;
+}
+
+/// docs/performance.md: what is measured, the command that measures it again, the machine
+/// and build, and the tables; generated whole, so that the page cannot drift from the program.
+std::string performancePage(const std::string& command, const std::string& header, const std::string& tables)
+{
+    std::string page = R"(# Performance
+
+<!-- Written by msii-benchmark --markdown; do not edit by hand: run the command below. -->
+
+Stage timings of `msii compute` on a generated tablet surface (the benchmark's own input: an
+irregular, scanner-like triangulation with cuneiform wedges), medians of the runs, with the
+other commands' costs on its results. Targets: 30 s and 4 GB for the 1.1M-vertex tablet, and
+at most 10 % of the total for mesh preparation.
+
+```bash
+)";
+    page += command + "\n```\n\n" + header + "\n" + tables;
+    page += R"(
+What the rows are:
+- **total wall, read to write**: reading the PLY, preparing the mesh (checks, repair, hole
+  filling), the computation and writing the result, as `msii compute` does them.
+- **compute in K x K tiles**: the same computation with `--tiles K`; its values are compared
+  with the untiled run's, bit for bit.
+- **exact mode**: `msii compute --exact` on 2,000 consecutive vertices of the tablet (setting
+  up the whole mesh is most of that time) and on every vertex of a closed 7 × 5 × 3 mm tablet
+  slab whose walls and bottom are a few long triangles (R = 1 mm, N = 16, 2 threads); the
+  per-vertex rate comes from the slab.
+- **metric, 1-ring, EXR map, PNG picture**: `msii metric`, `msii smooth`, `msii map` and
+  `msii render` on the tablet's results.
+
+This machine's timings vary from one sitting to the next, by 15–20 % within a day and by up
+to 2× between days, also in stages whose code did not change: compare builds in alternating
+runs. The accuracy of the same settings is in [accuracy.md](accuracy.md); P and L use
+8 cells per radius by default (`--pl-precision 6` is faster and less exact at sharp edges).
+)";
+    return page;
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -122,7 +187,24 @@ int main(int argc, char** argv)
     app.add_option("--exact-slab", exactSlab,
                    "also time the exact mode on every vertex of a closed 7 x 5 x 3 mm tablet slab with long wall and bottom "
                    "triangles (39k vertices, same spacing, R and N; default true)");
+    std::string markdown;
+    app.add_option("--markdown", markdown,
+                   "also write the results as the Markdown page docs/performance.md (machine, build, command, "
+                   "tables)");
     CLI11_PARSE(app, argc, argv);
+    // The command as given, without --markdown FILE, for the page.
+    std::string command = "build/tools/msii-benchmark";
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--markdown") {
+            ++i;
+            continue;
+        }
+        if (a.rfind("--markdown=", 0) == 0) continue;
+        command += " " + a;
+    }
+    command += markdown.empty() ? "" : " --markdown docs/performance.md";
+    Report report;
 
     samples::HeightFieldOptions ho;
     ho.kind = samples::HeightFieldKind::Tablet;
@@ -416,7 +498,7 @@ int main(int argc, char** argv)
 
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
-    std::printf("msii-benchmark: tablet %.1f x %.1f mm, spacing %.3f mm, %zu vertices, R = %g, N = %d, "
+    report.print("msii-benchmark: tablet %.1f x %.1f mm, spacing %.3f mm, %zu vertices, R = %g, N = %d, "
                 "%s, precision %g (P, L: %g), voxel %.4f mm, %d levels, %d runs (medians)\n",
                 size, size, spacing, nv, radius, scales, invariants.c_str(), precision,
                 [&] {
@@ -427,12 +509,12 @@ int main(int argc, char** argv)
                 }(),
                 last.voxelSize,
                 last.invariants.numLevels, runs);
-    std::printf("machine: %s, %u hardware threads\n\n", cpuModel().c_str(), std::thread::hardware_concurrency());
-    std::printf("| %-62s | %8s |\n|%s|%s|\n", "stage", "seconds", std::string(64, '-').c_str(), std::string(10, '-').c_str());
-    const auto row = [](const char* name, double value, const char* format) {
-        std::printf("| %-62s | ", name);
-        std::printf(format, value);
-        std::printf(" |\n");
+    report.print("machine: %s, %u hardware threads\n\n", cpuModel().c_str(), std::thread::hardware_concurrency());
+    report.print("| %-62s | %8s |\n|%s|%s|\n", "stage", "seconds", std::string(64, '-').c_str(), std::string(10, '-').c_str());
+    const auto row = [&report](const char* name, double value, const char* format) {
+        report.print("| %-62s | ", name);
+        report.print(format, value);
+        report.print(" |\n");
     };
     row("generate + write input (not counted)", gen, "%8.2f");
     row("read PLY", median(read), "%8.2f");
@@ -488,30 +570,38 @@ int main(int argc, char** argv)
     row("peak memory (MB)", usage.ru_maxrss / 1024.0, "%8.0f");
     std::fflush(stdout);
 
-    if (!large.ok) return 0;
+    const auto finish = [&] {
+        if (markdown.empty()) return 0;
+        const std::string header = "Measured on " + todayUtc() + " with msii " + versionString() + " (" +
+                                   MSII_BUILD_TYPE + " build).\n";
+        writeTextFileAtomic(markdown, performancePage(command, header, report.text));
+        std::fprintf(stderr, "msii-benchmark: wrote %s\n", markdown.c_str());
+        return 0;
+    };
+    if (!large.ok) return finish();
     const nlohmann::json& j = large.json;
     const double largeNv = j["mesh"]["vertices"].get<double>();
     const int perAxis = j["tiling"]["tiles_per_axis"].get<int>();
     const double perVertex = large.compute.seconds / largeNv, smallPerVertex = median(total) / double(nv);
-    std::printf("\nstreamed terrain %s x %s mm, spacing %.3f mm, %.0f vertices, %.0f triangles; "
+    report.print("\nstreamed terrain %s x %s mm, spacing %.3f mm, %.0f vertices, %.0f triangles; "
                 "msii compute -r %g -n %d --invariants %s --memory-budget %s: %d x %d tiles (largest %.0f "
                 "vertices with halo, halo %.2f mm); one run each, separate processes\n\n",
                 number(large.side).c_str(), number(large.side).c_str(), spacing, largeNv, j["mesh"]["faces"].get<double>(),
                 radius, scales, invariants.c_str(), largeBudget.c_str(), perAxis, perAxis,
                 j["tiling"]["largest_tile_vertices"].get<double>(), j["tiling"]["halo"].get<double>());
-    std::printf("| %-62s | %8s | %8s |\n|%s|%s|%s|\n", "stage", "seconds", "peak MB", std::string(64, '-').c_str(),
+    report.print("| %-62s | %8s | %8s |\n|%s|%s|%s|\n", "stage", "seconds", "peak MB", std::string(64, '-').c_str(),
                 std::string(10, '-').c_str(), std::string(10, '-').c_str());
-    std::printf("| %-62s | %8.1f | %8.0f |\n",
+    report.print("| %-62s | %8.1f | %8.0f |\n",
                 ("msii-samples terrain, streamed (" + std::to_string(int(large.inputBytes / 1e6)) + " MB)").c_str(),
                 large.generate.seconds, large.generate.peakBytes / 1e6);
-    std::printf("| %-62s | %8.1f | %8.0f |\n",
+    report.print("| %-62s | %8.1f | %8.0f |\n",
                 ("**msii compute, read to write** (" + std::to_string(int(large.outputBytes / 1e6)) + " MB)").c_str(),
                 large.compute.seconds, large.compute.peakBytes / 1e6);
     const auto& t = j["timings_seconds"];
     for (const char* stage : {"read", "check", "level_set", "stencils", "samples", "patch_line", "write"})
-        std::printf("| %-62s | %8.1f | %8s |\n", ("  of which " + std::string(stage)).c_str(), t[stage].get<double>(), "");
-    std::printf("| %-62s | %8.2f | %8s |\n", "microseconds per vertex", 1e6 * perVertex, "");
-    std::printf("| %-62s | %8.2f | %8s |\n", "the same for the tablet above (total wall / vertices)", 1e6 * smallPerVertex, "");
-    std::printf("| %-62s | %8.2f | %8s |\n", "ratio (target <= 1.5)", perVertex / smallPerVertex, "");
-    return 0;
+        report.print("| %-62s | %8.1f | %8s |\n", ("  of which " + std::string(stage)).c_str(), t[stage].get<double>(), "");
+    report.print("| %-62s | %8.2f | %8s |\n", "microseconds per vertex", 1e6 * perVertex, "");
+    report.print("| %-62s | %8.2f | %8s |\n", "the same for the tablet above (total wall / vertices)", 1e6 * smallPerVertex, "");
+    report.print("| %-62s | %8.2f | %8s |\n", "ratio (target <= 1.5)", perVertex / smallPerVertex, "");
+    return finish();
 }

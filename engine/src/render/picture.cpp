@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace msii {
 namespace {
@@ -17,14 +18,51 @@ void checkChannel(const std::vector<float>* c, std::size_t n, const char* what)
     if (c->size() != n) throw InvalidInputError(std::string("the ") + what + " channel has the wrong size");
 }
 
+/// Marks (1) the pixels of the 4-connected regions above or below @p level (finite pixels
+/// only) with fewer than @p minPixels pixels.
+std::vector<std::uint8_t> smallRegions(const std::vector<float>& f, int w, int h, double level, int minPixels)
+{
+    const std::size_t n = std::size_t(w) * std::size_t(h);
+    std::vector<std::uint8_t> small(n, 0);
+    if (minPixels <= 1) return small;
+    std::vector<std::uint8_t> seen(n, 0);
+    std::vector<std::size_t> region, stack;
+    for (std::size_t start = 0; start < n; ++start) {
+        if (seen[start] || !std::isfinite(f[start])) continue;
+        const bool above = f[start] >= level;
+        region.clear();
+        stack.assign(1, start);
+        seen[start] = 1;
+        while (!stack.empty()) {
+            const std::size_t i = stack.back();
+            stack.pop_back();
+            region.push_back(i);
+            const int x = int(i % std::size_t(w)), y = int(i / std::size_t(w));
+            const std::size_t next[4] = {x > 0 ? i - 1 : n, x + 1 < w ? i + 1 : n, y > 0 ? i - std::size_t(w) : n,
+                                         y + 1 < h ? i + std::size_t(w) : n};
+            for (const std::size_t j : next)
+                if (j < n && !seen[j] && std::isfinite(f[j]) && (f[j] >= level) == above) {
+                    seen[j] = 1;
+                    stack.push_back(j);
+                }
+        }
+        if (region.size() < std::size_t(minPixels))
+            for (const std::size_t i : region) small[i] = 1;
+    }
+    return small;
+}
+
 /// Isolines by marching squares over the pixel centres: per cell of four neighbouring
 /// pixels, the segments where the bilinear field crosses each level (saddles split by the
-/// cell's mean), drawn anti-aliased.
-void drawIsolines(RgbImage& image, const std::vector<float>& f, int w, int h, const std::vector<double>& levels)
+/// cell's mean), drawn anti-aliased; not around regions of fewer than @p minPixels pixels.
+void drawIsolines(RgbImage& image, const std::vector<float>& f, int w, int h, const std::vector<double>& levels,
+                  int minPixels)
 {
     if (levels.empty()) return;
     std::vector<double> sorted(levels);
     std::sort(sorted.begin(), sorted.end());
+    std::vector<std::vector<std::uint8_t>> small;
+    for (const double level : sorted) small.push_back(smallRegions(f, w, h, level, minPixels));
     const Rgb8 black{0, 0, 0};
     for (int y = 0; y + 1 < h; ++y)
         for (int x = 0; x + 1 < w; ++x) {
@@ -36,6 +74,9 @@ void drawIsolines(RgbImage& image, const std::vector<float>& f, int w, int h, co
             const double px[4] = {x + 0.5, x + 1.5, x + 1.5, x + 0.5}, py[4] = {y + 0.5, y + 0.5, y + 1.5, y + 1.5};
             for (auto it = std::upper_bound(sorted.begin(), sorted.end(), lo); it != sorted.end() && *it <= hi; ++it) {
                 const double level = *it;
+                const std::vector<std::uint8_t>& tiny = small[std::size_t(it - sorted.begin())];
+                const std::size_t i0 = std::size_t(y) * w + x, i1 = i0 + std::size_t(w);
+                if (tiny[i0] || tiny[i0 + 1] || tiny[i1] || tiny[i1 + 1]) continue;
                 double cx[4], cy[4];
                 int n = 0;
                 for (int e = 0; e < 4; ++e) {
@@ -139,7 +180,8 @@ PictureResult renderPicture(const PictureChannels& ch, const PictureOptions& opt
             result.isolineLevels.push_back(lo + span * k / (options.isolineCount + 1));
         for (double l : result.isolineLevels)
             if (!std::isfinite(l)) throw InvalidInputError("isoline levels must be finite");
-        drawIsolines(image, masked, ch.width, ch.height, result.isolineLevels);
+        if (options.isolineMinPixels < 0) throw InvalidInputError("the isolines' minimum region must not be negative");
+        drawIsolines(image, masked, ch.width, ch.height, result.isolineLevels, options.isolineMinPixels);
     }
     result.image = std::move(image);
     return result;

@@ -34,6 +34,10 @@ struct PictureOptions {
     double center = 0;
     std::vector<double> isolineLevels;  ///< drawn as black lines (marching squares on the pixels)
     int isolineCount = 0;             ///< > 0: this many levels evenly inside the range (added to the above)
+    /// Isolines around a region (above or below a level) of fewer pixels than this are left
+    /// out: a scan's noise makes specks of a few pixels wherever the surface lies near a
+    /// level, which read as dust, not as contours (cartography's minimum area). 0 draws all.
+    int isolineMinPixels = 16;
     ShadingOptions shading;
     double shadeStrength = 0.6;       ///< with colour: colour × (1 − s + s·shade)
     Rgb8 background{255, 255, 255};
