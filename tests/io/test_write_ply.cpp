@@ -246,7 +246,7 @@ TEST(WritePly, LargeMeshWithManyPropertiesRoundTrips)
 // ---------------------------------------------------------------------------------------
 // AtomicFile
 
-// PlyPieceWriter (issue 6: results larger than memory are written tile by tile): pieces in
+// PlyPieceWriter (results larger than memory are written tile by tile): pieces in
 // any order give the bytes of writePly; vertices never given are NaN; nothing appears before
 // commit(), and an abandoned writer leaves no file.
 TEST(PlyPieceWriter, PiecesInAnyOrderGiveTheBytesOfWritePly)

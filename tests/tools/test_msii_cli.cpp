@@ -405,7 +405,7 @@ std::vector<std::string> manifestStatuses(const fs::path& path)
 }
 } // namespace
 
-// A folder as a collection (issue 6): good and broken files, the rest goes on after a
+// A folder as a collection: good and broken files, the rest goes on after a
 // failure, finished outputs are skipped on a rerun, an interrupted output (no JSON record)
 // is redone, the manifest records each input, and the exit status says whether any failed.
 TEST(MsiiCli, ComputeCollectionSkipsResumesAndReports)
@@ -570,7 +570,7 @@ TEST(MsiiCli, StlSoupGivesTheValuesOfTheSharedMesh)
     EXPECT_LE(largest, 1e-6);
 }
 
-// --tiles and --memory-budget (issue 6): the tiled run writes the same file as the
+// --tiles and --memory-budget: the tiled run writes the same file as the
 // untiled one, records its tiling in the JSON, and a budget too small for one tile is refused.
 TEST(MsiiCli, TiledComputeWritesTheSameFeatures)
 {

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The Snakemake workflow of samples/snakemake on a folder of generated scans (issue 6):
+# The Snakemake workflow of samples/snakemake on a folder of generated scans:
 # runs locally with --cores 2; every scan gives the same PLY as `msii compute` run directly
 # (byte for byte), a picture and a summary line; a rerun does nothing; a broken scan fails
 # its job while the others finish (--keep-going); the workflow is ready for Slurm (dry run).

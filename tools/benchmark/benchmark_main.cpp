@@ -5,7 +5,7 @@
 /// Each run does what `msii compute` does: read the mesh from a binary PLY file (written
 /// once beforehand), compute, and write the result PLY; the total is that whole wall time.
 /// With --large-vertices it then runs the `msii-samples` and `msii` programs themselves on
-/// a streamed terrain of that size (issue 6), each in its own process so that its peak
+/// a streamed terrain of that size, each in its own process so that its peak
 /// memory is its own, and prints their time, memory and time per vertex against the above.
 /// It also times the exact mode (--exact): on a block of the tablet's vertices, and on every
 /// vertex of a closed slab whose walls and bottom are a few long triangles.
@@ -226,7 +226,7 @@ int main(int argc, char** argv)
         bool ok = false;
     } large;
     if (largeVertices > 0) {
-        // Issue 6: a terrain far larger than the tablet, generated streamed to disk and computed
+        // A terrain far larger than the tablet, generated streamed to disk and computed
         // by msii compute in tiles sized from the memory budget; one run (it takes long). Run
         // first, while this process is small: a spawned child starts out sharing this process's
         // memory, which would count in its peak.
@@ -386,7 +386,7 @@ int main(int argc, char** argv)
     }
 
     // After compute: every metric over all computed features (4 × N with V,S,P,L) against a
-    // vertex's vector, and 30 passes of each 1-ring filter on quality (issue 4's stages).
+    // vertex's vector, and 30 passes of each 1-ring filter on quality.
     const std::vector<VertexProperty> props = featureProperties(featuresOf(last.invariants, last.patchLine));
     std::vector<Invariant> all;
     for (const auto& [c, inv] : {std::pair{'V', Invariant::Volume}, std::pair{'S', Invariant::Sphere},
@@ -438,7 +438,7 @@ int main(int argc, char** argv)
             (filter == SmoothingFilter::Mean ? ringMean : ringMedian).push_back(passes.seconds());
         }
     }
-    // Issue 5's stages: the EXR feature map (every feature and quality; default PIZ float,
+    // The EXR feature map (every feature and quality; default PIZ float,
     // and the variants) and a PNG picture (rasterise, colour, shade, isolines, bars, write).
     struct MapRow {
         std::string name;

@@ -1,4 +1,4 @@
-/// `msii map INPUT.ply`: an OpenEXR feature map of the mesh seen orthographically (issue 5):
+/// `msii map INPUT.ply`: an OpenEXR feature map of the mesh seen orthographically:
 /// height over the plane, normal, mask and every vertex property, with the frame in the header.
 #include "commands.h"
 #include "feature_input.h"

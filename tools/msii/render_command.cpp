@@ -1,4 +1,4 @@
-/// `msii render INPUT`: PNG pictures of a feature PLY or an EXR feature map (issue 5): false
+/// `msii render INPUT`: PNG pictures of a feature PLY or an EXR feature map: false
 /// colour of a value with isolines, shaded relief (virtual illumination), the height map of
 /// the paper's Fig. 7c, with a colour bar and a scale bar.
 #include "commands.h"

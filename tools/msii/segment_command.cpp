@@ -1,4 +1,4 @@
-/// `msii segment INPUT.ply --threshold T` and `msii outline INPUT.ply --levels …` (issue 5):
+/// `msii segment INPUT.ply --threshold T` and `msii outline INPUT.ply --levels …`:
 /// connected components of a thresholded per-vertex value (labels and a table), and isolines
 /// as SVG outlines in the map plane, for tracing and drawing.
 #include "commands.h"
