@@ -20,12 +20,15 @@ packages=(
   libopenvdb-dev libboost-iostreams-dev libblosc-dev
   libopenmesh-dev libopenexr-dev libtbb-dev libpng-dev
   libfreetype-dev libfontconfig-dev fonts-dejavu-core
+  pybind11-dev python3-dev python3-numpy
   libcgal-dev libeigen3-dev
   libcli11-dev nlohmann-json3-dev
   libgtest-dev
 )
 # The tests also run the Snakemake workflow of samples/snakemake.
 [ "$with_tests" = ON ] && packages+=(snakemake)
+# ... and the Python module's tests and its documented example (plots with matplotlib).
+[ "$with_tests" = ON ] && packages+=(python3-pytest python3-matplotlib)
 
 missing=()
 for p in "${packages[@]}"; do

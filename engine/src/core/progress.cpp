@@ -10,7 +10,8 @@ Progress::Progress(bool enabled) : mEnabled(enabled) {}
 
 Progress::~Progress()
 {
-    if (mActive) end();
+    // Not end(): its listener may throw, and a destructor runs during unwinding too.
+    if (mActive && mEnabled) draw(true);
 }
 
 bool Progress::stderrIsTerminal() { return ::isatty(STDERR_FILENO) == 1; }
@@ -27,17 +28,19 @@ void Progress::start(const std::string& stage, std::size_t total)
         std::fprintf(stderr, "\r\033[K%s ...", mStage.c_str());
         std::fflush(stderr);
     }
+    if (mListener) mListener(mStage, 0, mTotal);
 }
 
 void Progress::advance(std::size_t done)
 {
     mDone += done;
-    if (!mEnabled) return;
+    if (!mEnabled && !mListener) return;
     const auto now = std::chrono::steady_clock::now();
     std::unique_lock<std::mutex> lock(mMutex, std::try_to_lock);
     if (!lock.owns_lock() || now - mLastDraw < std::chrono::milliseconds(100)) return;
     mLastDraw = now;
-    draw(false);
+    if (mEnabled) draw(false);
+    if (mListener) mListener(mStage, mDone.load(), mTotal);
 }
 
 void Progress::end()
@@ -46,6 +49,13 @@ void Progress::end()
     if (!mActive) return;
     mActive = false;
     if (mEnabled) draw(true);
+    if (mListener) mListener(mStage, mTotal, mTotal);
+}
+
+void Progress::setListener(Listener listener)
+{
+    std::lock_guard<std::mutex> lock(mMutex);
+    mListener = std::move(listener);
 }
 
 void Progress::setPrefix(const std::string& prefix)

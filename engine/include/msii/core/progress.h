@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <mutex>
 #include <string>
 
@@ -26,6 +27,14 @@ public:
     /// Text shown before every stage from now on, e.g. "tile 3 of 25: " (empty: none).
     void setPrefix(const std::string& prefix);
 
+    /// Called with (stage, done, total) at start(), from advance() at most ~10 times per
+    /// second (any thread, one at a time) and at end(), whether or not the line is printed:
+    /// how programs (e.g. the Python module) follow the work. It may throw to cancel the
+    /// work, as OpenVDB's interrupters do: the exception leaves advance() and the engine
+    /// function that called it (TBB cancels the other tasks of a parallel loop).
+    using Listener = std::function<void(const std::string& stage, std::size_t done, std::size_t total)>;
+    void setListener(Listener listener);
+
     bool enabled() const { return mEnabled; }
     static bool stderrIsTerminal();
 
@@ -39,6 +48,7 @@ private:
     std::mutex mMutex;
     std::chrono::steady_clock::time_point mStart, mLastDraw;
     bool mActive = false;
+    Listener mListener;
 };
 
 } // namespace msii

@@ -1,0 +1,272 @@
+/// @file msii_module.cpp
+/// @brief `import msii`: the engine for Python. Meshes come in and results go out as numpy
+/// arrays; msii.compute runs what `msii compute` runs (mesh preparation, then the
+/// invariants, mapped back to the input's vertices), so its values equal the CLI's bit for
+/// bit. The computation runs without the GIL; Ctrl-C cancels it (KeyboardInterrupt) through
+/// the engine's progress listener (core/progress.h), which also feeds `progress`.
+#include <msii/core/errors.h>
+#include <msii/core/progress.h>
+#include <msii/core/version.h>
+#include <msii/invariants/compute.h>
+#include <msii/invariants/scales.h>
+#include <msii/io/write_ply.h>
+#include <msii/mesh/prepare_mesh.h>
+#include <msii/mesh/read_mesh.h>
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace py = pybind11;
+using namespace msii;
+
+namespace {
+
+/// Thrown from the progress listener to unwind the engine when Python wants to stop (a
+/// signal such as Ctrl-C, or an exception raised by the progress callable). The Python
+/// error itself travels in `PendingError`, fetched in the thread that saw it and restored in
+/// the calling thread.
+struct Cancelled {};
+
+struct PendingError {
+    PyObject *type = nullptr, *value = nullptr, *traceback = nullptr;
+    void fetch() { PyErr_Fetch(&type, &value, &traceback); }   // with the GIL
+    void restore() { PyErr_Restore(type, value, traceback); }  // with the GIL; gives the references away
+};
+
+std::string shapeText(const py::array& a)
+{
+    std::string s = "(";
+    for (py::ssize_t d = 0; d < a.ndim(); ++d) s += (d ? ", " : "") + std::to_string(a.shape(d));
+    return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+template <class T>
+void readPoints(const py::array& a, std::vector<Vec3>& points)
+{
+    const auto r = a.unchecked<T, 2>();  // any strides: no copy of the array
+    points.resize(std::size_t(r.shape(0)));
+    for (py::ssize_t i = 0; i < r.shape(0); ++i) {
+        const Vec3 p(double(r(i, 0)), double(r(i, 1)), double(r(i, 2)));
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            throw py::value_error("vertex " + std::to_string(i) + " has a coordinate that is not a finite number.");
+        points[std::size_t(i)] = p;
+    }
+}
+
+template <class T>
+void readFaces(const py::array& a, std::size_t numVertices, std::vector<Triangle>& triangles)
+{
+    const auto r = a.unchecked<T, 2>();
+    triangles.resize(std::size_t(r.shape(0)));
+    for (py::ssize_t f = 0; f < r.shape(0); ++f)
+        for (int k = 0; k < 3; ++k) {
+            const T v = r(f, k);
+            if (v < 0 || std::uint64_t(v) >= numVertices)
+                throw py::value_error("face " + std::to_string(f) + " refers to vertex " + std::to_string(v) +
+                                      ", but there are " + std::to_string(numVertices) + " vertices.");
+            triangles[std::size_t(f)][k] = std::uint32_t(v);
+        }
+}
+
+/// The mesh of (n, 3) float32/float64 vertices and (m, 3) integer faces, read in place.
+TriMesh meshOf(const py::array& vertices, const py::array& faces)
+{
+    if (vertices.ndim() != 2 || vertices.shape(1) != 3)
+        throw py::value_error("vertices must be an array of shape (n, 3), not " + shapeText(vertices) + ".");
+    if (faces.ndim() != 2 || faces.shape(1) != 3)
+        throw py::value_error("faces must be an array of shape (m, 3), not " + shapeText(faces) + ".");
+    TriMesh mesh;
+    const py::dtype vt = vertices.dtype(), ft = faces.dtype();
+    if (vt.is(py::dtype::of<double>())) readPoints<double>(vertices, mesh.points);
+    else if (vt.is(py::dtype::of<float>())) readPoints<float>(vertices, mesh.points);
+    else throw py::value_error("vertices must be float32 or float64, not " + py::str(py::handle(vt)).cast<std::string>() + ".");
+    const std::size_t n = mesh.points.size();
+    if (ft.is(py::dtype::of<std::int32_t>())) readFaces<std::int32_t>(faces, n, mesh.triangles);
+    else if (ft.is(py::dtype::of<std::int64_t>())) readFaces<std::int64_t>(faces, n, mesh.triangles);
+    else if (ft.is(py::dtype::of<std::uint32_t>())) readFaces<std::uint32_t>(faces, n, mesh.triangles);
+    else if (ft.is(py::dtype::of<std::uint64_t>())) readFaces<std::uint64_t>(faces, n, mesh.triangles);
+    else throw py::value_error("faces must be int32, int64, uint32 or uint64, not " + py::str(py::handle(ft)).cast<std::string>() + ".");
+    return mesh;
+}
+
+/// A column per radius ([j][vertex]) as one (n_vertices, N) float32 array; frees each
+/// column once copied, so the result is held once, not twice.
+py::object featureArray(std::vector<std::vector<float>>& columns)
+{
+    if (columns.empty()) return py::none();
+    const std::size_t nr = columns.size(), nv = columns.front().size();
+    py::array_t<float> out({nv, nr});
+    auto w = out.mutable_unchecked<2>();
+    for (std::size_t j = 0; j < nr; ++j) {
+        for (std::size_t i = 0; i < nv; ++i) w(py::ssize_t(i), py::ssize_t(j)) = columns[j][i];
+        std::vector<float>().swap(columns[j]);
+    }
+    return std::move(out);
+}
+
+struct Selection {
+    bool v = false, s = false, p = false, l = false;
+};
+
+Selection parseInvariants(const std::string& text)
+{
+    Selection sel;
+    for (const char c : text) {
+        switch (c) {
+        case 'V': case 'v': sel.v = true; break;
+        case 'S': case 's': sel.s = true; break;
+        case 'P': case 'p': sel.p = true; break;
+        case 'L': case 'l': sel.l = true; break;
+        case ',': case ' ': break;
+        default:
+            throw py::value_error("invariants must be letters of V, S, P and L (e.g. \"VS\"), not \"" + text + "\".");
+        }
+    }
+    if (!(sel.v || sel.s || sel.p || sel.l)) throw py::value_error("invariants names none of V, S, P and L.");
+    return sel;
+}
+
+py::object compute(const py::array& vertices, const py::array& faces, double radius, int scales,
+                 const std::string& invariants, bool exact, int threads, const py::object& progress)
+{
+    const TriMesh mesh = meshOf(vertices, faces);
+    if (!(radius > 0) || !std::isfinite(radius)) throw py::value_error("radius must be a positive number.");
+    if (threads < 0) throw py::value_error("threads must be 0 (all cores) or more.");
+    const Selection sel = parseInvariants(invariants);
+    const bool follow = !progress.is_none();
+    if (follow && !PyCallable_Check(progress.ptr()))
+        throw py::value_error("progress must be a callable (stage, done, total) or None.");
+
+    PendingError pending;
+    ComputeResult result;
+    PrepareMeshResult prepared;
+    std::vector<std::string> warnings;
+    {
+        py::gil_scoped_release free;
+        std::unique_ptr<tbb::global_control> limit;
+        if (threads > 0)
+            limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+        Progress watch(false);
+        watch.setListener([&](const std::string& stage, std::size_t done, std::size_t total) {
+            py::gil_scoped_acquire hold;
+            if (PyErr_CheckSignals() != 0) {  // Ctrl-C (in the main thread): KeyboardInterrupt
+                pending.fetch();
+                throw Cancelled{};
+            }
+            if (!follow) return;
+            try {
+                progress(stage, done, total);
+            } catch (py::error_already_set& e) {
+                e.restore();
+                pending.fetch();
+                throw Cancelled{};
+            }
+        });
+        try {
+            PrepareMeshOptions po;
+            po.maxHolePerimeter = defaultMaxHolePerimeter(radius);
+            po.radius = radius;
+            prepared = prepareMesh(mesh, po);
+            for (const PrepareChange& c : prepared.changes) warnings.push_back(c.message);
+            ComputeOptions o;
+            o.radius = radius;
+            o.scales = scales;
+            o.computeVolume = sel.v, o.computeSphere = sel.s, o.computePatch = sel.p, o.computeLine = sel.l;
+            o.exact = exact;
+            result = computeInvariants(prepared.mesh, o, &watch);
+        } catch (const Cancelled&) {
+            py::gil_scoped_acquire hold;
+            pending.restore();
+            throw py::error_already_set();
+        } catch (const InvalidInputError& e) {
+            throw py::value_error(e.what());
+        }
+        for (const std::string& w : result.warnings) warnings.push_back(w);
+        for (auto* columns : {&result.invariants.volume, &result.invariants.sphere, &result.patchLine.patch,
+                              &result.patchLine.line})
+            for (std::vector<float>& column : *columns) column = toInputVertices(prepared, column);
+    }
+    py::dict out;
+    out["V"] = featureArray(result.invariants.volume);
+    out["S"] = featureArray(result.invariants.sphere);
+    out["P"] = featureArray(result.patchLine.patch);
+    out["L"] = featureArray(result.patchLine.line);
+    out["radii"] = py::array_t<double>(py::ssize_t(result.invariants.radii.size()), result.invariants.radii.data());
+    out["voxel_size"] = result.voxelSize;
+    out["levels"] = result.invariants.levelOfRadius;
+    out["exact"] = exact;
+    out["warnings"] = warnings;
+    return py::module_::import("types").attr("SimpleNamespace")(**out);
+}
+
+py::tuple readMeshArrays(const std::string& path)
+{
+    ReadMeshResult read;
+    {
+        py::gil_scoped_release free;
+        read = readMesh(path);
+    }
+    const std::size_t nv = read.mesh.numVertices(), nf = read.mesh.numTriangles();
+    py::array_t<double> v({nv, std::size_t(3)});
+    py::array_t<std::int32_t> f({nf, std::size_t(3)});
+    auto vw = v.mutable_unchecked<2>();
+    auto fw = f.mutable_unchecked<2>();
+    for (std::size_t i = 0; i < nv; ++i)
+        for (int k = 0; k < 3; ++k) vw(py::ssize_t(i), k) = read.mesh.points[i][k];
+    for (std::size_t t = 0; t < nf; ++t)
+        for (int k = 0; k < 3; ++k) fw(py::ssize_t(t), k) = std::int32_t(read.mesh.triangles[t][k]);
+    return py::make_tuple(v, f);
+}
+
+void writePlyArrays(const std::string& path, const py::array& vertices, const py::array& faces,
+                    const py::dict& properties)
+{
+    const TriMesh mesh = meshOf(vertices, faces);
+    std::vector<VertexProperty> props;
+    for (const auto& [key, value] : properties) {
+        const std::string name = py::str(key);
+        const py::array_t<float, py::array::forcecast> a = py::array_t<float, py::array::forcecast>::ensure(value);
+        if (!a || a.ndim() != 1 || std::size_t(a.shape(0)) != mesh.numVertices())
+            throw py::value_error("property '" + name + "' must be an array of one value per vertex (" +
+                                  std::to_string(mesh.numVertices()) + ").");
+        props.push_back({name, std::vector<float>(a.data(), a.data() + a.shape(0))});
+    }
+    py::gil_scoped_release free;
+    writePly(path, mesh, props);
+}
+
+} // namespace
+
+PYBIND11_MODULE(msii, m)
+{
+    m.doc() = "Multi-Scale Integral Invariants (V, S, P, L) per vertex of triangle meshes: 3D scans of tablets, "
+              "seals, inscriptions and terrain. See docs/python.md.";
+    m.attr("__version__") = versionString();
+    // The engine's two errors as Python's: input that cannot be computed, and files.
+    py::register_exception<InvalidInputError>(m, "InvalidInputError", PyExc_ValueError);
+    py::register_exception<IOError>(m, "IOError", PyExc_OSError);
+
+    m.def("read_mesh", &readMeshArrays, py::arg("path"),
+          "Reads a PLY, OBJ, OFF or STL mesh: (vertices float64 (n, 3), faces int32 (m, 3)).");
+    m.def("compute", &compute, py::arg("vertices"), py::arg("faces"), py::arg("radius"), py::arg("scales") = 16,
+          py::arg("invariants") = "VSPL", py::arg("exact") = false, py::arg("threads") = 0,
+          py::arg("progress") = py::none(),
+          "The integral invariants at N = scales radii r_j = j*radius/N for every vertex, as msii compute "
+          "computes them (mesh preparation included; the same values bit for bit). Returns an object with V, S, P, L "
+          "(float32 (n_vertices, N), NaN where the ball reaches an open border, None if not asked), radii, "
+          "voxel_size, levels (grid level per radius), exact, warnings (what preparation repaired or filled, one "
+          "sentence each). progress(stage, done, total) is called about 10 times per second; Ctrl-C cancels "
+          "(KeyboardInterrupt). The GIL is released while computing.");
+    m.def("write_ply", &writePlyArrays, py::arg("path"), py::arg("vertices"), py::arg("faces"),
+          py::arg("properties") = py::dict(),
+          "Writes a binary PLY with per-vertex float properties {name: array of n values}, atomically.");
+}

@@ -1,0 +1,165 @@
+"""Tests of the Python module `msii` (python/msii_module.cpp), run by the README's test
+command through ctest: msii.compute on arrays equals `msii compute` on the same mesh's PLY
+bit for bit; any C-contiguous or strided float32/float64 and integer arrays give the same
+values; bad arrays raise ValueError with one sentence; progress is reported and an exception
+from it stops the work; Ctrl-C cancels with KeyboardInterrupt."""
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+import msii
+
+MSII = os.environ["MSII_EXE"]
+SAMPLES = os.environ["MSII_SAMPLES_EXE"]
+
+
+def read_ply(path):
+    """The vertex records of a binary little-endian PLY as a numpy structured array."""
+    types = {"float": "<f4", "double": "<f8", "int": "<i4", "uchar": "u1"}
+    with open(path, "rb") as f:
+        fields, in_vertex, count = [], False, 0
+        while True:
+            line = f.readline().decode().strip()
+            if line == "end_header":
+                break
+            words = line.split()
+            if words[0] == "element":
+                in_vertex = words[1] == "vertex"
+                if in_vertex:
+                    count = int(words[2])
+            elif words[0] == "property" and in_vertex:
+                fields.append((words[2], types[words[1]]))
+        return np.frombuffer(f.read(count * np.dtype(fields).itemsize), dtype=np.dtype(fields), count=count)
+
+
+@pytest.fixture(scope="module")
+def tablet(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("tablet")
+    scan = folder / "scan.ply"
+    subprocess.run([SAMPLES, "tablet", "--width", "6", "--height", "5", "--spacing", "0.08", "-q", "-o", str(scan)],
+                   check=True)
+    return scan
+
+
+def test_compute_equals_the_cli_bit_for_bit(tablet, tmp_path):
+    out = tmp_path / "scan.msii.ply"
+    subprocess.run([MSII, "compute", str(tablet), "-r", "0.8", "-q", "-o", str(out)], check=True)
+    cli = read_ply(out)
+    vertices, faces = msii.read_mesh(str(tablet))
+    assert vertices.dtype == np.float64 and vertices.shape == (len(cli), 3)
+    assert faces.dtype == np.int32 and faces.shape[1] == 3
+    r = msii.compute(vertices, faces, 0.8)
+    assert r.radii.shape == (16,)
+    assert np.allclose(r.radii, 0.8 * np.arange(1, 17) / 16)
+    compared = 0
+    for letter in "VSPL":
+        values = getattr(r, letter)
+        assert values.dtype == np.float32 and values.shape == (len(cli), 16)
+        for j in range(16):
+            column = cli["%s_%02d" % (letter, j + 1)]
+            same = (values[:, j] == column) | (np.isnan(values[:, j]) & np.isnan(column))
+            assert same.all(), "%s_%02d differs at %d vertices" % (letter, j + 1, (~same).sum())
+            compared += np.count_nonzero(~np.isnan(column))
+    assert compared > 100000
+    assert np.isnan(r.V).any() and not np.isnan(r.V).all()  # open border: masked values
+    assert r.voxel_size > 0 and len(r.levels) == 16
+
+
+def test_array_types_and_layouts_give_the_same_values(tablet):
+    vertices, faces = msii.read_mesh(str(tablet))
+    ref = msii.compute(vertices, faces, 0.8, scales=4, invariants="VS")
+    assert ref.P is None and ref.L is None
+    variants = [
+        (vertices.astype(np.float32), faces.astype(np.int64)),     # the PLY's floats are float32
+        (np.asfortranarray(vertices), np.asfortranarray(faces)),  # not C-contiguous
+        (np.hstack([vertices, np.zeros_like(vertices)])[:, :3], faces.astype(np.uint32)),  # a strided view
+    ]
+    for v, f in variants:
+        r = msii.compute(v, f, 0.8, scales=4, invariants="V,S", threads=1)
+        assert np.array_equal(r.V, ref.V, equal_nan=True)
+        assert np.array_equal(r.S, ref.S, equal_nan=True)
+
+
+@pytest.mark.parametrize("vertices, faces, message", [
+    (np.zeros((4, 2)), np.zeros((1, 3), np.int32), "vertices must be an array of shape (n, 3), not (4, 2)."),
+    (np.zeros((4, 3)), np.zeros((3,), np.int32), "faces must be an array of shape (m, 3), not (3,)."),
+    (np.zeros((4, 3)), np.array([[0, 1, 4]], np.int32), "face 0 refers to vertex 4, but there are 4 vertices."),
+    (np.zeros((4, 3)), np.array([[0, -1, 2]], np.int64), "face 0 refers to vertex -1, but there are 4 vertices."),
+    (np.array([[0, 0, 0], [1, 0, 0], [0, np.nan, 0]], float), np.array([[0, 1, 2]], np.int32),
+     "vertex 2 has a coordinate that is not a finite number."),
+    (np.zeros((4, 3), np.int32), np.zeros((1, 3), np.int32), "vertices must be float32 or float64, not int32."),
+    (np.zeros((4, 3)), np.zeros((1, 3), np.float64), "faces must be int32, int64, uint32 or uint64, not float64."),
+])
+def test_bad_arrays_raise_value_error(vertices, faces, message):
+    with pytest.raises(ValueError) as error:
+        msii.compute(vertices, faces, 1.0)
+    assert str(error.value) == message
+
+
+def test_bad_arguments_raise_value_error(tablet):
+    vertices, faces = msii.read_mesh(str(tablet))
+    for kwargs, text in [({"radius": -1.0}, "radius"), ({"radius": 0.8, "invariants": "VX"}, "invariants"),
+                         ({"radius": 0.8, "threads": -2}, "threads"), ({"radius": 0.8, "progress": 3}, "progress")]:
+        with pytest.raises(ValueError, match=text):
+            msii.compute(vertices, faces, **kwargs)
+    with pytest.raises(OSError, match="cannot open"):
+        msii.read_mesh(str(tablet) + ".missing.ply")
+    with pytest.raises(ValueError, match="unknown file extension"):
+        msii.read_mesh(str(tablet) + ".xyz")
+
+
+def test_progress_is_reported_and_can_stop_the_work(tablet):
+    vertices, faces = msii.read_mesh(str(tablet))
+    calls = []
+    msii.compute(vertices, faces, 0.8, scales=4, progress=lambda stage, done, total: calls.append((stage, done, total)))
+    assert len(calls) >= 4
+    assert all(isinstance(s, str) and 0 <= d <= t for s, d, t in calls if t > 0)
+
+    class Stop(Exception):
+        pass
+
+    def stop(stage, done, total):
+        raise Stop(stage)
+
+    with pytest.raises(Stop):
+        msii.compute(vertices, faces, 0.8, progress=stop)
+
+
+def test_ctrl_c_cancels_with_keyboard_interrupt(tmp_path):
+    script = textwrap.dedent("""
+        import os, signal, sys, threading, time
+        import msii
+        vertices, faces = msii.read_mesh(sys.argv[1])
+        threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+        start = time.time()
+        try:
+            msii.compute(vertices, faces, 1.0, exact=True)
+            print("finished")
+        except KeyboardInterrupt:
+            print("interrupted after %.1f s" % (time.time() - start))
+    """)
+    scan = tmp_path / "big.ply"
+    subprocess.run([SAMPLES, "tablet", "--width", "12", "--height", "10", "--spacing", "0.05", "-q", "-o", str(scan)],
+                   check=True)
+    run = subprocess.run([sys.executable, "-c", script, str(scan)], capture_output=True, text=True, timeout=120,
+                         env=dict(os.environ))
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.startswith("interrupted after"), run.stdout + run.stderr
+    assert float(run.stdout.split()[2]) < 10.0
+
+
+def test_write_ply_round_trip(tmp_path):
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], np.float64)
+    faces = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]], np.int32)
+    path = tmp_path / "t.ply"
+    msii.write_ply(str(path), vertices, faces, {"quality": np.array([0.5, 1, 2, 3], np.float32)})
+    v, f = msii.read_mesh(str(path))
+    assert np.array_equal(v, vertices) and np.array_equal(f, faces)
+    assert np.array_equal(read_ply(path)["quality"], np.array([0.5, 1, 2, 3], np.float32))
+    with pytest.raises(ValueError, match="one value per vertex"):
+        msii.write_ply(str(path), vertices, faces, {"q": np.zeros(3)})
