@@ -12,6 +12,8 @@
 #include <msii/io/write_ply.h>
 #include <msii/mesh/prepare_mesh.h>
 #include <msii/mesh/read_mesh.h>
+#include <msii/metrics/feature_metrics.h>
+#include <msii/smoothing/ring_smoothing.h>
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -244,6 +246,101 @@ void writePlyArrays(const std::string& path, const py::array& vertices, const py
     writePly(path, mesh, props);
 }
 
+/// One value per vertex from the feature vectors of a compute result (paper §3.1).
+py::array_t<float> metric(const py::object& result, const std::string& name, const py::object& reference, double p,
+                          const std::string& invariants)
+{
+    const MetricOptions options = metricOptionsByName(name, p);
+    FeatureTable table;
+    std::vector<py::array_t<float>> blocks;
+    const std::string letters = invariants.empty() ? "VSPL" : invariants;
+    for (const char c : letters) {
+        const Invariant inv = c == 'V' || c == 'v' ? Invariant::Volume
+                              : c == 'S' || c == 's' ? Invariant::Sphere
+                              : c == 'P' || c == 'p' ? Invariant::Patch
+                              : c == 'L' || c == 'l' ? Invariant::Line
+                                                     : throw py::value_error("invariants must be letters of V, S, P and L.");
+        const py::object a = py::getattr(result, std::string(1, invariantLetter(inv)).c_str(), py::none());
+        if (a.is_none()) {
+            if (invariants.empty()) continue;  // the result's own invariants
+            throw py::value_error(std::string("the result has no ") + invariantLetter(inv) + " features.");
+        }
+        py::array_t<float> block = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(a);
+        if (!block || block.ndim() != 2 || block.shape(1) < 1)
+            throw py::value_error(std::string(1, invariantLetter(inv)) + " must be an array of shape (n_vertices, N).");
+        if (!blocks.empty() && block.shape(0) != blocks.front().shape(0))
+            throw py::value_error("the invariants' arrays have different numbers of vertices.");
+        table.blocks.push_back({inv, int(block.shape(1))});
+        blocks.push_back(block);
+    }
+    if (blocks.empty()) throw py::value_error("the result has no features (V, S, P or L).");
+    table.numVertices = std::size_t(blocks.front().shape(0));
+    const std::size_t dim = table.dimension();
+    table.values.resize(table.numVertices * dim);
+    std::size_t first = 0;
+    for (const auto& block : blocks) {
+        const auto r = block.unchecked<2>();
+        for (py::ssize_t i = 0; i < r.shape(0); ++i)
+            for (py::ssize_t e = 0; e < r.shape(1); ++e) table.values[std::size_t(i) * dim + first + std::size_t(e)] = r(i, e);
+        first += std::size_t(r.shape(1));
+    }
+    std::vector<double> ref;
+    if (py::isinstance<py::str>(reference)) {
+        if (reference.cast<std::string>() != "flat")
+            throw py::value_error("reference must be \"flat\", a vertex index or a feature vector.");
+        ref = flatReference(table);
+    } else if (py::isinstance<py::int_>(reference)) {
+        const long long v = reference.cast<long long>();
+        if (v < 0 || std::size_t(v) >= table.numVertices)
+            throw py::value_error("reference vertex " + std::to_string(v) + " is not one of the " +
+                                  std::to_string(table.numVertices) + " vertices.");
+        ref = vertexReference(table, std::size_t(v));
+    } else {
+        const auto vec = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(reference);
+        if (!vec || vec.ndim() != 1 || std::size_t(vec.shape(0)) != dim)
+            throw py::value_error("a reference vector must have " + std::to_string(dim) + " values.");
+        ref.assign(vec.data(), vec.data() + dim);
+    }
+    MetricResult r;
+    {
+        py::gil_scoped_release free;
+        r = computeMetric(table, ref, options);
+    }
+    return py::array_t<float>(py::ssize_t(r.values.size()), r.values.data());
+}
+
+/// 1-ring smoothing (paper §3.2) of one value per vertex, or of each column of (n, k).
+py::array_t<float> smooth(const py::array& vertices, const py::array& faces, const py::array& values, int iterations,
+                          const std::string& filter)
+{
+    const TriMesh mesh = meshOf(vertices, faces);
+    if (iterations < 0) throw py::value_error("iterations must be 0 or more.");
+    SmoothingOptions options;
+    options.iterations = iterations;
+    if (filter == "mean") options.filter = SmoothingFilter::Mean;
+    else if (filter == "median") options.filter = SmoothingFilter::Median;
+    else throw py::value_error("filter must be \"mean\" or \"median\", not \"" + filter + "\".");
+    py::array_t<float> in = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(values);
+    if (!in || (in.ndim() != 1 && in.ndim() != 2) || std::size_t(in.shape(0)) != mesh.numVertices())
+        throw py::value_error("values must have one row per vertex (" + std::to_string(mesh.numVertices()) +
+                              "), as shape (n,) or (n, k).");
+    const std::size_t n = mesh.numVertices(), k = in.ndim() == 2 ? std::size_t(in.shape(1)) : 1;
+    py::array_t<float> out(in.request().shape);
+    const float* src = in.data();
+    float* dst = out.mutable_data();
+    {
+        py::gil_scoped_release free;
+        const RingSmoother smoother(mesh, options);
+        std::vector<float> column(n);
+        for (std::size_t c = 0; c < k; ++c) {
+            for (std::size_t i = 0; i < n; ++i) column[i] = src[i * k + c];
+            smoother.smooth(column);
+            for (std::size_t i = 0; i < n; ++i) dst[i * k + c] = column[i];
+        }
+    }
+    return out;
+}
+
 } // namespace
 
 PYBIND11_MODULE(msii, m)
@@ -266,6 +363,16 @@ PYBIND11_MODULE(msii, m)
           "voxel_size, levels (grid level per radius), exact, warnings (what preparation repaired or filled, one "
           "sentence each). progress(stage, done, total) is called about 10 times per second; Ctrl-C cancels "
           "(KeyboardInterrupt). The GIL is released while computing.");
+    m.def("metric", &metric, py::arg("result"), py::arg("metric") = "mahalanobis", py::arg("reference") = "flat",
+          py::arg("p") = 2.0, py::arg("invariants") = "",
+          "One value per vertex from the feature vectors of a compute result (paper Sec. 3.1), as msii metric: "
+          "metric l1, l2, linf, lp (with p), l1w, l2w, linfw, lpw, mahalanobis, cosine, correlation, "
+          "autocorrelation, tanimoto or neuclid; reference \"flat\" (a plane's values), a vertex index or a "
+          "feature vector; invariants e.g. \"VP\" (default: all the result has). float32 (n,), NaN where undefined.");
+    m.def("smooth", &smooth, py::arg("vertices"), py::arg("faces"), py::arg("values"), py::arg("iterations") = 30,
+          py::arg("filter") = "mean",
+          "Fast 1-ring smoothing (paper Sec. 3.2) of values (n,) or each column of (n, k), as msii smooth: "
+          "filter \"mean\" or \"median\", iterations passes. float32, same shape.");
     m.def("write_ply", &writePlyArrays, py::arg("path"), py::arg("vertices"), py::arg("faces"),
           py::arg("properties") = py::dict(),
           "Writes a binary PLY with per-vertex float properties {name: array of n values}, atomically.");

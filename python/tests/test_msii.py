@@ -1,6 +1,6 @@
 """Tests of the Python module `msii` (python/msii_module.cpp), run by the README's test
 command through ctest: msii.compute on arrays equals `msii compute` on the same mesh's PLY
-bit for bit; any C-contiguous or strided float32/float64 and integer arrays give the same
+bit for bit, and msii.metric and msii.smooth equal `msii metric` and `msii smooth`; any C-contiguous or strided float32/float64 and integer arrays give the same
 values; bad arrays raise ValueError with one sentence; progress is reported and an exception
 from it stops the work; Ctrl-C cancels with KeyboardInterrupt."""
 import os
@@ -163,3 +163,37 @@ def test_write_ply_round_trip(tmp_path):
     assert np.array_equal(read_ply(path)["quality"], np.array([0.5, 1, 2, 3], np.float32))
     with pytest.raises(ValueError, match="one value per vertex"):
         msii.write_ply(str(path), vertices, faces, {"q": np.zeros(3)})
+
+
+def test_metric_and_smooth_equal_the_cli(tablet, tmp_path):
+    out = tmp_path / "scan.msii.ply"
+    subprocess.run([MSII, "compute", str(tablet), "-r", "0.8", "-n", "8", "-q", "-o", str(out)], check=True)
+    vertices, faces = msii.read_mesh(str(tablet))
+    r = msii.compute(vertices, faces, 0.8, scales=8)
+    for name, invariants, reference in [("l2", "V", "flat"), ("mahalanobis", "V,P", "flat"),
+                                        ("l1w", "V,S,P,L", "flat"), ("cosine", "S", 2000)]:
+        m = tmp_path / ("metric-%s.ply" % name)
+        subprocess.run([MSII, "metric", str(out), "--invariants", invariants, "--metric", name, "-q", "-o", str(m),
+                        "--reference", reference if reference == "flat" else "vertex:%d" % reference], check=True)
+        cli = read_ply(m)["f_" + name]
+        mine = msii.metric(r, name, reference=reference, invariants=invariants.replace(",", ""))
+        assert mine.dtype == np.float32 and mine.shape == (len(vertices),)
+        assert np.array_equal(mine, cli, equal_nan=True), name
+        assert np.count_nonzero(~np.isnan(cli)) > 1000
+    # A vertex as the reference: 0 at that vertex.
+    assert msii.metric(r, "l2", reference=2000, invariants="V")[2000] == 0
+    with pytest.raises(ValueError, match="unknown metric"):
+        msii.metric(r, "l3")
+    with pytest.raises(ValueError, match="reference vertex"):
+        msii.metric(r, "l2", reference=10**9)
+
+    s = tmp_path / "smooth.ply"
+    subprocess.run([MSII, "smooth", str(out), "--properties", "V_08", "-q", "-o", str(s)], check=True)
+    cli = read_ply(s)["V_08"]
+    mine = msii.smooth(vertices, faces, r.V[:, 7])
+    assert np.array_equal(mine, cli, equal_nan=True)
+    both = msii.smooth(vertices, faces, r.V[:, 6:8], iterations=30)
+    assert both.shape == (len(vertices), 2) and np.array_equal(both[:, 1], cli, equal_nan=True)
+    assert np.array_equal(msii.smooth(vertices, faces, r.V[:, 7], iterations=0), r.V[:, 7], equal_nan=True)
+    with pytest.raises(ValueError, match="filter"):
+        msii.smooth(vertices, faces, r.V[:, 7], filter="gauss")

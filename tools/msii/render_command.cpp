@@ -194,7 +194,8 @@ int runRender(const RenderArgs& args)
         FontOptions fo;
         fo.file = args.font;
         font = findFont(fo);
-        if (!font.warning.empty() && !args.quiet) std::fprintf(stderr, "msii: warning: %s\n", font.warning.c_str());
+        if (!font.warning.empty() && !args.quiet)
+            std::fprintf(stderr, "msii: warning: %s (--font FILE names a font)\n", font.warning.c_str());
         if (!font.typeface.isBuiltIn()) {
             figure.typeface = &font.typeface;
             figure.lineHeight = labelLineHeight(picture.image.height);

@@ -125,9 +125,9 @@ std::string mostlyMaskedWarning(const std::vector<double>& radii, const std::vec
     for (std::size_t j = 0; j < radii.size(); ++j)
         if (share(j) <= 0.5) kept = j;
     if (kept == radii.size())
-        msg << "more than half are even at the smallest radius: fill the holes or use a much smaller --radius";
+        msg << "more than half are even at the smallest radius: fill the holes or use a much smaller largest radius";
     else
-        msg << "at r = " << radii[kept] << " at least half have values: a smaller --radius keeps more";
+        msg << "at r = " << radii[kept] << " at least half have values: a smaller largest radius keeps more";
     return msg.str();
 }
 

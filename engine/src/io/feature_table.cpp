@@ -58,7 +58,7 @@ FeatureTable featureTableOf(const std::vector<VertexProperty>& properties, std::
             throw InvalidInputError(std::string("the input has no ") + letter + " features (" +
                                     featureName(letter, 0) + " …); it has " +
                                     (present.empty() ? std::string("none") : present) +
-                                    " (compute them with msii compute --invariants, or read a GigaMesh .mat file with --mat)");
+                                    " (compute them first, or read them from a GigaMesh .mat file)");
         }
         for (int j = 0; j < count; ++j) {
             const VertexProperty* p = byName[featureName(letter, std::size_t(j))];

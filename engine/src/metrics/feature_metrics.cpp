@@ -618,6 +618,29 @@ std::vector<double> dependencyMatrix(Invariant invariant, int n)
     return w;
 }
 
+MetricOptions metricOptionsByName(const std::string& name, double p)
+{
+    if (!(p > 0)) throw InvalidInputError("the p of a p-norm must be a positive number (or infinity)");
+    MetricOptions o;
+    std::string base = name;
+    if (base.size() > 1 && base[0] == 'l' && base.back() == 'w') o.weighted = true, base.pop_back();
+    if (base == "l1") o.p = 1;
+    else if (base == "l2") o.p = 2;
+    else if (base == "linf") o.p = std::numeric_limits<double>::infinity();
+    else if (base == "lp") o.p = p;
+    else if (!o.weighted && name == "mahalanobis") o.kind = MetricKind::Mahalanobis;
+    else if (!o.weighted && name == "cosine") o.kind = MetricKind::Cosine;
+    else if (!o.weighted && name == "correlation") o.kind = MetricKind::Correlation;
+    else if (!o.weighted && name == "autocorrelation") o.kind = MetricKind::AutoCorrelation;
+    else if (!o.weighted && name == "tanimoto") o.kind = MetricKind::Tanimoto;
+    else if (!o.weighted && name == "neuclid") o.kind = MetricKind::NormalizedEuclidean;
+    else
+        throw InvalidInputError("unknown metric '" + name +
+                                "' (use l1, l2, linf, lp, their weighted forms l1w, l2w, linfw, lpw, "
+                                "mahalanobis, cosine, correlation, autocorrelation, tanimoto, neuclid)");
+    return o;
+}
+
 MetricResult computeMetric(const FeatureTable& table, const std::vector<double>& reference,
                            const MetricOptions& options)
 {

@@ -183,7 +183,7 @@ FontResult findFont(const FontOptions& options)
             // fall through to the built-in font
         }
     }
-    result.warning = "no font found (install fonts-dejavu-core, or name a TrueType file with --font or MSII_FONT); "
+    result.warning = "no font found (install fonts-dejavu-core, or name a TrueType file in MSII_FONT); "
                      "labels use the built-in pixel font";
     return result;
 }

@@ -167,7 +167,7 @@ ComputeResult runTiles(const TriMesh& mesh, const ComputeOptions& options, const
                        const TileSink& sink, TiledComputeInfo* info, Progress* progress)
 {
     const Stopwatch total;
-    if (options.exact) throw InvalidInputError("the exact mode is not tiled (restrict it with --vertices)");
+    if (options.exact) throw InvalidInputError("the exact mode is not tiled (restrict it to chosen vertices instead)");
     if (tiling.memoryBudget < 0 || !std::isfinite(tiling.memoryBudget))
         throw InvalidInputError("the memory budget must be a positive number of bytes");
     if (tiling.tilesPerAxis < 0 || tiling.tilesPerAxis > 1024)

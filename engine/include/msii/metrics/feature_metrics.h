@@ -18,6 +18,7 @@
 #include <msii/mesh/trimesh.h>
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 namespace msii {
@@ -89,6 +90,11 @@ struct MetricResult {
     std::size_t numNegativeForms = 0;   ///< Mahalanobis: vertices whose quadratic form was negative (f = −sqrt(−q) there)
     std::size_t numUndefined = 0;       ///< vertices with f = NaN (NaN elements, zero-variance vectors for Correlation/Cosine/Tanimoto/AutoCorrelation)
 };
+
+/// The metric of a name as the documentation gives them: l1, l2, linf, lp (p-norm with
+/// @p p), their weighted forms l1w, l2w, linfw, lpw, mahalanobis, cosine, correlation,
+/// autocorrelation, tanimoto, neuclid. @throw InvalidInputError for another name or p <= 0.
+MetricOptions metricOptionsByName(const std::string& name, double p = 2.0);
 
 /// f(p_i) for every vertex of @p table against the reference @p reference (dimension()
 /// values, e.g. flatReference(), vertexReference() or the user's vector).
