@@ -141,6 +141,10 @@ What the rows are:
   per-vertex rate comes from the slab.
 - **metric, 1-ring, EXR map, PNG picture**: `msii metric`, `msii smooth`, `msii map` and
   `msii render` on the tablet's results.
+- **own process**: `msii compute` and the Python module's `msii.compute` on the same tablet,
+  each run once in a process of its own, with that process's peak memory. The Python
+  result holds its arrays (vertices, faces and the (n, N) float32 arrays of V, S, P, L) on
+  top of the engine's own peak, and should cost no more than that sum.
 
 This machine's timings vary from one sitting to the next, by 15–20 % within a day and by up
 to 2× between days, also in stages whose code did not change: compare builds in alternating
@@ -180,7 +184,10 @@ int main(int argc, char** argv)
     app.add_option("--msii", msiiProgram, "the msii program (default: the one built with this benchmark)");
     app.add_option("--msii-samples", samplesProgram, "the msii-samples program (default: the one built with this benchmark)");
     int exactVertices = 2000;
-    bool exactSlab = true;
+    bool exactSlab = true, processes = true;
+    app.add_option("--processes", processes,
+                   "also run msii compute and the Python module's msii.compute on the tablet, each in its own "
+                   "process, for their time and peak memory (default true)");
     app.add_option("--exact-vertices", exactVertices,
                    "also time the exact mode (--exact) on this many consecutive vertices in the middle of the tablet "
                    "(default 2000; 0: skip)");
@@ -343,6 +350,34 @@ int main(int argc, char** argv)
         }
         if (run + 1 == runs) lastMesh = std::move(mesh);
     }
+    // Memory of the program and of the Python module on the same input, each in its own
+    // process (one run each): a Python result costs its arrays on top of the engine's own
+    // peak, no more.
+    ChildRun cliRun, pythonRun;
+    double pythonArrays = 0;
+    if (processes) {
+        std::vector<std::string> args{msiiProgram, "compute", input, "-r", number(radius), "-n", std::to_string(scales),
+                                      "--precision", number(precision), "--invariants", invariants, "-q",
+                                      "--overwrite", "--output", (dir / "process.msii.ply").string()};
+        if (plPrecision > 0) args.insert(args.end(), {"--pl-precision", number(plPrecision)});
+        cliRun = runChild(args);
+#ifdef MSII_PYTHON
+        if (precision == 6.0 && plPrecision == 0 && voxel == 0) {  // msii.compute's defaults
+            ::setenv("PYTHONPATH", MSII_PYTHON_DIR, 1);
+            pythonRun = runChild({MSII_PYTHON, "-c",
+                                  "import sys, msii\n"
+                                  "v, f = msii.read_mesh(sys.argv[1])\n"
+                                  "r = msii.compute(v, f, float(sys.argv[2]), scales=int(sys.argv[3]), "
+                                  "invariants=sys.argv[4])\n",
+                                  input, number(radius), std::to_string(scales), invariants});
+            std::size_t letters = 0;
+            for (const char c : std::string("VSPL")) letters += has(c) ? 1 : 0;
+            pythonArrays = double(nv) * (double(scales) * 4.0 * double(letters) + 24.0) +
+                           double(lastMesh.numTriangles()) * 12.0;
+        }
+#endif
+    }
+
     fs::remove_all(dir);
 
     // The exact mode (V, S, P, L from the triangles): on a block of the tablet's vertices,
@@ -568,6 +603,17 @@ int main(int argc, char** argv)
                 .c_str(),
             median(pictureSeconds), "%8.2f");
     row("peak memory (MB)", usage.ru_maxrss / 1024.0, "%8.0f");
+    if (cliRun.ok) {
+        row("msii compute, own process: read to write", cliRun.seconds, "%8.2f");
+        row("the same, peak memory (MB)", cliRun.peakBytes / 1e6, "%8.0f");
+    }
+    if (pythonRun.ok) {
+        row("Python msii.compute, own process: import, read, compute", pythonRun.seconds, "%8.2f");
+        row("the same, peak memory (MB)", pythonRun.peakBytes / 1e6, "%8.0f");
+        row("arrays it holds: vertices, faces, V, S, P, L (MB)", pythonArrays / 1e6, "%8.0f");
+        row("its peak beyond msii compute's and the arrays (MB, target <= 0)",
+            (pythonRun.peakBytes - cliRun.peakBytes - pythonArrays) / 1e6, "%8.0f");
+    }
     std::fflush(stdout);
 
     const auto finish = [&] {
