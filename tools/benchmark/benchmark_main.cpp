@@ -361,6 +361,12 @@ int main(int argc, char** argv)
                                       "--overwrite", "--output", (dir / "process.msii.ply").string()};
         if (plPrecision > 0) args.insert(args.end(), {"--pl-precision", number(plPrecision)});
         cliRun = runChild(args);
+        // Peaks as the processes measure them (VmHWM): wait4's counts the memory this
+        // benchmark held when it started them.
+        if (cliRun.ok) {
+            std::ifstream record((dir / "process.msii.json").string());
+            cliRun.peakBytes = nlohmann::json::parse(record).value("peak_memory_bytes", 0.0);
+        }
 #ifdef MSII_PYTHON
         if (precision == 6.0 && plPrecision == 0 && voxel == 0) {  // msii.compute's defaults
             ::setenv("PYTHONPATH", MSII_PYTHON_DIR, 1);
@@ -368,8 +374,15 @@ int main(int argc, char** argv)
                                   "import sys, msii\n"
                                   "v, f = msii.read_mesh(sys.argv[1])\n"
                                   "r = msii.compute(v, f, float(sys.argv[2]), scales=int(sys.argv[3]), "
-                                  "invariants=sys.argv[4])\n",
-                                  input, number(radius), std::to_string(scales), invariants});
+                                  "invariants=sys.argv[4])\n"
+                                  "peak = [l for l in open('/proc/self/status') if l.startswith('VmHWM:')][0]\n"
+                                  "open(sys.argv[5], 'w').write(str(float(peak.split()[1]) * 1024))\n",
+                                  input, number(radius), std::to_string(scales), invariants,
+                                  (dir / "python-peak.txt").string()});
+            if (pythonRun.ok) {
+                std::ifstream peak((dir / "python-peak.txt").string());
+                peak >> pythonRun.peakBytes;
+            }
             std::size_t letters = 0;
             for (const char c : std::string("VSPL")) letters += has(c) ? 1 : 0;
             pythonArrays = double(nv) * (double(scales) * 4.0 * double(letters) + 24.0) +

@@ -495,6 +495,12 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                  {"area", st.area},
                  {"masked_values", inv.numMaskedValues}};
     j["level_set"] = {{"active_voxels", result.levelSetVoxels}, {"bytes", result.levelSetBytes}};
+    // The process's peak resident memory so far (Linux VmHWM: of this program only, unlike
+    // getrusage, which counts what a parent held when it started the program).
+    if (std::ifstream status("/proc/self/status"); status) {
+        for (std::string line; std::getline(status, line);)
+            if (line.rfind("VmHWM:", 0) == 0) j["peak_memory_bytes"] = std::stod(line.substr(6)) * 1024.0;
+    }
     const auto& t = result.timings;
     j["timings_seconds"] = {{"read", readSeconds},     {"prepare", prepareSeconds}, {"check", t.check},
                             {"level_set", t.levelSet}, {"occupancy", t.occupancy},
