@@ -138,11 +138,13 @@ Selection parseInvariants(const std::string& text)
 }
 
 py::object compute(const py::array& vertices, const py::array& faces, double radius, int scales,
-                 const std::string& invariants, bool exact, int threads, const py::object& progress)
+                 const std::string& invariants, bool exact, int threads, const py::object& progress,
+                 double memoryBudget, int tiles)
 {
     const TriMesh mesh = meshOf(vertices, faces);
     if (!(radius > 0) || !std::isfinite(radius)) throw py::value_error("radius must be a positive number.");
     if (threads < 0) throw py::value_error("threads must be 0 (all cores) or more.");
+    if (!(memoryBudget >= 0) || tiles < 0) throw py::value_error("memory_budget and tiles must be 0 or more.");
     const Selection sel = parseInvariants(invariants);
     const bool follow = !progress.is_none();
     if (follow && !PyCallable_Check(progress.ptr()))
@@ -184,6 +186,8 @@ py::object compute(const py::array& vertices, const py::array& faces, double rad
             o.scales = scales;
             o.computeVolume = sel.v, o.computeSphere = sel.s, o.computePatch = sel.p, o.computeLine = sel.l;
             o.exact = exact;
+            o.memoryBudget = memoryBudget;
+            o.tilesPerAxis = tiles;
             result = computeInvariants(prepared.mesh, o, &watch);
         } catch (const Cancelled&) {
             py::gil_scoped_acquire hold;
@@ -356,13 +360,14 @@ PYBIND11_MODULE(msii, m)
           "Reads a PLY, OBJ, OFF or STL mesh: (vertices float64 (n, 3), faces int32 (m, 3)).");
     m.def("compute", &compute, py::arg("vertices"), py::arg("faces"), py::arg("radius"), py::arg("scales") = 16,
           py::arg("invariants") = "VSPL", py::arg("exact") = false, py::arg("threads") = 0,
-          py::arg("progress") = py::none(),
+          py::arg("progress") = py::none(), py::arg("memory_budget") = 0.0, py::arg("tiles") = 0,
           "The integral invariants at N = scales radii r_j = j*radius/N for every vertex, as msii compute "
           "computes them (mesh preparation included; the same values bit for bit). Returns an object with V, S, P, L "
           "(float32 (n_vertices, N), NaN where the ball reaches an open border, None if not asked), radii, "
           "voxel_size, levels (grid level per radius), exact, warnings (what preparation repaired or filled, one "
           "sentence each). progress(stage, done, total) is called about 10 times per second; Ctrl-C cancels "
-          "(KeyboardInterrupt). The GIL is released while computing.");
+          "(KeyboardInterrupt). memory_budget (bytes) or tiles (per axis) compute in tiles, with the same values. "
+          "The GIL is released while computing.");
     m.def("metric", &metric, py::arg("result"), py::arg("metric") = "mahalanobis", py::arg("reference") = "flat",
           py::arg("p") = 2.0, py::arg("invariants") = "",
           "One value per vertex from the feature vectors of a compute result (paper Sec. 3.1), as msii metric: "

@@ -197,3 +197,16 @@ def test_metric_and_smooth_equal_the_cli(tablet, tmp_path):
     assert np.array_equal(msii.smooth(vertices, faces, r.V[:, 7], iterations=0), r.V[:, 7], equal_nan=True)
     with pytest.raises(ValueError, match="filter"):
         msii.smooth(vertices, faces, r.V[:, 7], filter="gauss")
+
+
+def test_tiles_give_the_same_values(tablet):
+    vertices, faces = msii.read_mesh(str(tablet))
+    whole = msii.compute(vertices, faces, 0.8, scales=4)
+    for kwargs in [{"tiles": 2}, {"tiles": 3}, {"memory_budget": 1e9}]:
+        part = msii.compute(vertices, faces, 0.8, scales=4, **kwargs)
+        for letter in "VSPL":
+            assert np.array_equal(getattr(part, letter), getattr(whole, letter), equal_nan=True), (kwargs, letter)
+    with pytest.raises(ValueError, match="not tiled"):
+        msii.compute(vertices, faces, 0.8, exact=True, tiles=2)
+    with pytest.raises(ValueError, match="0 or more"):
+        msii.compute(vertices, faces, 0.8, tiles=-1)

@@ -210,6 +210,31 @@ TEST(TiledCompute, ClosedSphereEqualsUntiled)
     EXPECT_EQ(t.tiled.invariants.numMaskedValues, 0u);
 }
 
+// The one entry point: computeInvariants with tilesPerAxis or a memory budget in its
+// options computes in tiles, with the values of one piece.
+TEST(TiledCompute, FrontDoorTilesEqualOnePiece)
+{
+    const TriMesh mesh = tablet(10, 8, 0.12);
+    ComputeOptions co;
+    co.radius = 1.0;
+    co.scales = 8;
+    const ComputeResult whole = computeInvariants(mesh, co);
+    for (const bool byBudget : {false, true}) {
+        ComputeOptions tiled = co;
+        if (byBudget) tiled.memoryBudget = 1e9;  // room for one tile: the budget route
+        else tiled.tilesPerAxis = 3;
+        const ComputeResult parts = computeInvariants(mesh, tiled);
+        TiledAgainstWhole t;
+        t.tiled = parts;
+        t.diff = maxDifference(whole, parts, t.nanMismatches, &t.compared);
+        expectBitIdentical(t, byBudget ? "front door, memory budget 1 GB" : "front door, 3 x 3 tiles");
+    }
+    ComputeOptions exact = co;
+    exact.exact = true;
+    exact.tilesPerAxis = 2;
+    EXPECT_THROW(computeInvariants(mesh, exact), InvalidInputError);
+}
+
 TEST(TiledCompute, TilesFromMemoryBudget)
 {
     TriMesh mesh = tablet();

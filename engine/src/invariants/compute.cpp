@@ -1,4 +1,5 @@
 #include <msii/invariants/compute.h>
+#include <msii/tiling/tiled_compute.h>
 
 #include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
@@ -133,6 +134,12 @@ std::string mostlyMaskedWarning(const std::vector<double>& radii, const std::vec
 
 ComputeResult computeInvariants(const TriMesh& mesh, const ComputeOptions& options, Progress* progress)
 {
+    if (options.memoryBudget != 0 || options.tilesPerAxis != 0) {
+        TilingOptions tiling;
+        tiling.memoryBudget = options.memoryBudget;
+        tiling.tilesPerAxis = options.tilesPerAxis;
+        return computeTiled(mesh, options, tiling, nullptr, progress);  // tiles run untiled
+    }
     const Stopwatch total;
     ComputeResult result = prepareComputation(mesh, options);
     Stopwatch stage;

@@ -240,6 +240,7 @@ ComputeResult runTiles(const TriMesh& mesh, const ComputeOptions& options, const
     std::size_t tilesWithVertices = 0;
     for (int t = 0; t < n * n; ++t) tilesWithVertices += ownVertices.begin(t) != ownVertices.end(t);
     ComputeOptions tileOptions = options;
+    tileOptions.memoryBudget = 0, tileOptions.tilesPerAxis = 0;  // each tile in one piece
     tileOptions.voxelSize = plan.voxelSize;  // the whole mesh's grid, so that tiles agree
     tileOptions.vertexSpacing = options.vertexSpacing > 0 ? options.vertexSpacing : plan.stats.medianEdge;
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();

@@ -40,6 +40,11 @@ struct ComputeOptions {
     /// The whole mesh's median edge length, for P and L's choice of route per level
     /// (PatchLineOptions::vertexSpacing); 0 = this mesh's. Tiles get the whole mesh's.
     double vertexSpacing = 0;
+    /// Tiling, for meshes larger than memory (tiling/tiled_compute.h): tiles whose
+    /// computation fits in this many bytes, or tilesPerAxis × tilesPerAxis tiles; 0 and 0:
+    /// one piece. The values equal those of one piece bit for bit. Not with `exact`.
+    double memoryBudget = 0;
+    int tilesPerAxis = 0;
 };
 
 struct ComputeTimings {
@@ -93,7 +98,9 @@ std::string mostlyMaskedWarning(const std::vector<double>& radii,
                                 std::size_t numVertices);
 
 /// Runs the job on @p mesh, which must be usable as it is: prepare scans first with
-/// mesh/prepare_mesh.h (repair, hole filling), which is what `msii compute` does.
+/// mesh/prepare_mesh.h (repair, hole filling), which is what `msii compute` does. The one
+/// entry point for fast, exact and tiled runs (options.exact, options.memoryBudget /
+/// tilesPerAxis); tiling/tiled_compute.h also streams tiles to a sink.
 /// @throw InvalidInputError for unusable meshes or parameters, with one clear sentence.
 ComputeResult computeInvariants(const TriMesh& mesh, const ComputeOptions& options,
                                 Progress* progress = nullptr);
