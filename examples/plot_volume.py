@@ -15,7 +15,7 @@ scan, radius, out = sys.argv[1], float(sys.argv[2]), sys.argv[3]
 vertices, faces = msii.read_mesh(scan)
 result = msii.compute(vertices, faces, radius, invariants="V")
 for warning in result.warnings:
-    print("msii:", warning)
+    print("msii:", warning.message)
 
 fig, axes = plt.subplots(1, 3, figsize=(15, 4.5), constrained_layout=True)
 for ax, j in zip(axes, [3, 7, 15]):  # r = R/4, R/2 and R (N = 16)

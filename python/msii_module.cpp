@@ -153,7 +153,7 @@ py::object compute(const py::array& vertices, const py::array& faces, double rad
     PendingError pending;
     ComputeResult result;
     PrepareMeshResult prepared;
-    std::vector<std::string> warnings;
+    std::vector<PrepareChange> diagnostics;  // what preparation changed, then the computation's remarks
     {
         py::gil_scoped_release free;
         std::unique_ptr<tbb::global_control> limit;
@@ -180,7 +180,7 @@ py::object compute(const py::array& vertices, const py::array& faces, double rad
             po.maxHolePerimeter = defaultMaxHolePerimeter(radius);
             po.radius = radius;
             prepared = prepareMesh(mesh, po);
-            for (const PrepareChange& c : prepared.changes) warnings.push_back(c.message);
+            diagnostics = prepared.changes;
             ComputeOptions o;
             o.radius = radius;
             o.scales = scales;
@@ -196,7 +196,7 @@ py::object compute(const py::array& vertices, const py::array& faces, double rad
         } catch (const InvalidInputError& e) {
             throw py::value_error(e.what());
         }
-        for (const std::string& w : result.warnings) warnings.push_back(w);
+        for (const std::string& w : result.warnings) diagnostics.push_back({"computation", 0, w});
         for (auto* columns : {&result.invariants.volume, &result.invariants.sphere, &result.patchLine.patch,
                               &result.patchLine.line})
             for (std::vector<float>& column : *columns) column = toInputVertices(prepared, column);
@@ -210,8 +210,14 @@ py::object compute(const py::array& vertices, const py::array& faces, double rad
     out["voxel_size"] = result.voxelSize;
     out["levels"] = result.invariants.levelOfRadius;
     out["exact"] = exact;
+    // Diagnostics as objects: kind (e.g. "duplicate_faces_removed", "holes_filled",
+    // "computation"), count (of faces, holes, vertices ...; 0 for remarks) and message.
+    const py::object record = py::module_::import("types").attr("SimpleNamespace");
+    py::list warnings;
+    for (const PrepareChange& d : diagnostics)
+        warnings.append(record(py::arg("kind") = d.kind, py::arg("count") = d.count, py::arg("message") = d.message));
     out["warnings"] = warnings;
-    return py::module_::import("types").attr("SimpleNamespace")(**out);
+    return record(**out);
 }
 
 py::tuple readMeshArrays(const std::string& path)
@@ -364,8 +370,8 @@ PYBIND11_MODULE(msii, m)
           "The integral invariants at N = scales radii r_j = j*radius/N for every vertex, as msii compute "
           "computes them (mesh preparation included; the same values bit for bit). Returns an object with V, S, P, L "
           "(float32 (n_vertices, N), NaN where the ball reaches an open border, None if not asked), radii, "
-          "voxel_size, levels (grid level per radius), exact, warnings (what preparation repaired or filled, one "
-          "sentence each). progress(stage, done, total) is called about 10 times per second; Ctrl-C cancels "
+          "voxel_size, levels (grid level per radius), exact, warnings (what preparation repaired or filled and the "
+          "computation's remarks, each with kind, count and message). progress(stage, done, total) is called about 10 times per second; Ctrl-C cancels "
           "(KeyboardInterrupt). memory_budget (bytes) or tiles (per axis) compute in tiles, with the same values. "
           "The GIL is released while computing.");
     m.def("metric", &metric, py::arg("result"), py::arg("metric") = "mahalanobis", py::arg("reference") = "flat",

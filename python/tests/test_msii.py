@@ -210,3 +210,16 @@ def test_tiles_give_the_same_values(tablet):
         msii.compute(vertices, faces, 0.8, exact=True, tiles=2)
     with pytest.raises(ValueError, match="0 or more"):
         msii.compute(vertices, faces, 0.8, tiles=-1)
+
+
+def test_warnings_are_objects_with_kind_count_and_message(tablet):
+    vertices, faces = msii.read_mesh(str(tablet))
+    doubled = np.vstack([faces, faces[:10]])  # 10 duplicate faces: removed, and said so
+    r = msii.compute(vertices, doubled, 0.8, scales=4, invariants="V")
+    kinds = {w.kind: w for w in r.warnings}
+    duplicates = [w for w in r.warnings if "duplicate" in w.kind]
+    assert len(duplicates) == 1 and duplicates[0].count == 10, kinds
+    assert all(isinstance(w.message, str) and w.message for w in r.warnings)
+    clean = msii.compute(vertices, faces, 0.8, scales=4, invariants="V")
+    assert not any("duplicate" in w.kind for w in clean.warnings)
+    assert np.array_equal(clean.V, r.V, equal_nan=True)  # the repaired mesh gives the same values
