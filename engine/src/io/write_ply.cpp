@@ -293,7 +293,7 @@ std::string plyHeader(std::size_t numVertices, std::size_t numFaces, const std::
 struct PlyPieceWriter::State {
     const TriMesh& mesh;
     AtomicFile file;
-    std::size_t numProperties = 0, recordBytes = 0;
+    std::size_t recordBytes = 0;
     std::vector<PlyColumn> columns;
     std::uint64_t vertexOffset = 0;  // where the first vertex record starts
     bool doublePoints = false;
@@ -317,7 +317,7 @@ struct PlyPieceWriter::State {
             char* out = buffer.data();
             for (std::size_t k = i; k < end; ++k) {
                 out = putPoint(out, mesh.points[vertices[k]], doublePoints);
-                for (std::size_t c = 0; c < numProperties; ++c) {
+                for (std::size_t c = 0; c < columns.size(); ++c) {
                     const float v = value(c, k);
                     out = columns[c].integer ? put(out, wholeNumber(v)) : put(out, v);
                 }
@@ -343,10 +343,9 @@ PlyPieceWriter::PlyPieceWriter(const std::string& path, const TriMesh& mesh, con
     checkWritable(path);
     mState = std::make_unique<State>(path, mesh);
     State& s = *mState;
-    s.numProperties = propertyNames.size();
     s.columns = columns;
     s.doublePoints = options.forceDoublePoints || needsDoublePoints(mesh.points);
-    s.recordBytes = (s.doublePoints ? 3 * sizeof(double) : 3 * sizeof(float)) + s.numProperties * sizeof(float);
+    s.recordBytes = (s.doublePoints ? 3 * sizeof(double) : 3 * sizeof(float)) + columns.size() * sizeof(float);
     static_assert(sizeof(std::int32_t) == sizeof(float), "int and float properties take the same room");
     const std::string header =
         plyHeader(mesh.numVertices(), mesh.numTriangles(), propertyNames, options, s.doublePoints, integer);
@@ -369,9 +368,9 @@ PlyPieceWriter::~PlyPieceWriter() = default;
 void PlyPieceWriter::write(const std::vector<std::uint32_t>& vertices, const std::vector<const float*>& columns)
 {
     State& s = *mState;
-    if (columns.size() != s.numProperties)
+    if (columns.size() != s.columns.size())
         throw InvalidInputError("PlyPieceWriter: " + std::to_string(columns.size()) + " columns for " +
-                                std::to_string(s.numProperties) + " properties.");
+                                std::to_string(s.columns.size()) + " properties.");
     for (std::uint32_t v : vertices) {
         if (v >= s.written.size())
             throw InvalidInputError("PlyPieceWriter: vertex " + std::to_string(v) + " out of range.");

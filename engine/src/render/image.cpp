@@ -261,7 +261,19 @@ const std::uint8_t* glyphRows(char32_t code)
     return kBoxRows;
 }
 
-/// Splits UTF-8 text into code points; a malformed byte counts as one (unknown) character.
+constexpr int kGlyphWidth = 5;
+constexpr int kAdvance = 6;  ///< font pixels from one character to the next
+
+int widthOf(std::size_t characters, int scale)
+{
+    if (characters == 0) return 0;
+    return (kAdvance * int(characters) - (kAdvance - kGlyphWidth)) * scale;
+}
+
+} // namespace
+
+// ---------------------------------------------------------------------------------------
+
 std::vector<char32_t> decodeUtf8(const std::string& text)
 {
     std::vector<char32_t> codes;
@@ -304,18 +316,6 @@ std::vector<char32_t> decodeUtf8(const std::string& text)
     return codes;
 }
 
-constexpr int kGlyphWidth = 5;
-constexpr int kAdvance = 6;  ///< font pixels from one character to the next
-
-int widthOf(std::size_t characters, int scale)
-{
-    if (characters == 0) return 0;
-    return (kAdvance * int(characters) - (kAdvance - kGlyphWidth)) * scale;
-}
-
-} // namespace
-
-// ---------------------------------------------------------------------------------------
 // RgbImage
 // ---------------------------------------------------------------------------------------
 

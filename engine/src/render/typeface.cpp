@@ -17,27 +17,6 @@ namespace msii {
 
 namespace {
 
-/// UTF-8 to code points; a malformed or truncated sequence gives U+FFFD for its first byte.
-std::vector<char32_t> codePoints(const std::string& text)
-{
-    std::vector<char32_t> out;
-    std::size_t i = 0;
-    while (i < text.size()) {
-        const unsigned char c = static_cast<unsigned char>(text[i]);
-        const int extra = c < 0x80 ? 0 : (c & 0xE0) == 0xC0 ? 1 : (c & 0xF0) == 0xE0 ? 2 : (c & 0xF8) == 0xF0 ? 3 : -1;
-        bool ok = extra >= 0 && i + std::size_t(extra) < text.size();
-        char32_t code = extra <= 0 ? c : char32_t(c & (0x3F >> extra));
-        for (int k = 1; ok && k <= extra; ++k) {
-            const unsigned char d = static_cast<unsigned char>(text[i + std::size_t(k)]);
-            ok = (d & 0xC0) == 0x80;
-            code = (code << 6) | (d & 0x3F);
-        }
-        out.push_back(ok ? code : char32_t(0xFFFD));
-        i += ok ? std::size_t(extra) + 1 : 1;
-    }
-    return out;
-}
-
 /// The built-in font's scale for a line height: its glyphs are 7 rows, lines 9.
 int builtInScale(int lineHeight) { return std::max(1, lineHeight / 9); }
 
@@ -110,23 +89,37 @@ Typeface Typeface::load(const std::string& file)
     return t;
 }
 
+namespace {
+
+/// Lays @p text out on face @p f from pen position 0 (26.6 fixed point), with kerning: loads
+/// each glyph with @p loadFlags and calls visit(slot, pen) before advancing the pen past it.
+/// Returns the pen's final position.
+template <class Visit>
+long layOut(FT_Face f, const std::string& text, FT_Int32 loadFlags, const Visit& visit)
+{
+    long pen = 0;
+    FT_UInt previous = 0;
+    for (const char32_t code : decodeUtf8(text)) {
+        const FT_UInt glyph = FT_Get_Char_Index(f, code);
+        if (previous && glyph && FT_HAS_KERNING(f)) {
+            FT_Vector kern;
+            if (FT_Get_Kerning(f, previous, glyph, FT_KERNING_DEFAULT, &kern) == 0) pen += kern.x;
+        }
+        previous = glyph;
+        if (FT_Load_Glyph(f, glyph, loadFlags) != 0) continue;
+        visit(f->glyph, pen);
+        pen += f->glyph->advance.x;
+    }
+    return pen;
+}
+
+} // namespace
+
 int Typeface::textWidth(const std::string& text, int lineHeight) const
 {
     if (!mFace) return msii::textWidth(text, builtInScale(lineHeight));
     mFace->setLineHeight(lineHeight);
-    FT_Face f = mFace->face;
-    long width = 0;
-    FT_UInt previous = 0;
-    for (char32_t code : codePoints(text)) {
-        const FT_UInt glyph = FT_Get_Char_Index(f, code);
-        if (previous && glyph && FT_HAS_KERNING(f)) {
-            FT_Vector kern;
-            if (FT_Get_Kerning(f, previous, glyph, FT_KERNING_DEFAULT, &kern) == 0) width += kern.x;
-        }
-        if (FT_Load_Glyph(f, glyph, FT_LOAD_DEFAULT) == 0) width += f->glyph->advance.x;
-        previous = glyph;
-    }
-    return int((width + 63) >> 6);
+    return int((layOut(mFace->face, text, FT_LOAD_DEFAULT, [](FT_GlyphSlot, long) {}) + 63) >> 6);
 }
 
 int Typeface::drawText(RgbImage& image, int x, int y, const std::string& text, Rgb8 color, int lineHeight) const
@@ -137,31 +130,18 @@ int Typeface::drawText(RgbImage& image, int x, int y, const std::string& text, R
         return msii::drawText(image, x, y + (lineHeight - 7 * s) / 2, text, color, s);
     }
     mFace->setLineHeight(lineHeight);
-    FT_Face f = mFace->face;
-    const long baseline = long(y) * 64 + f->size->metrics.ascender;  // 26.6 fixed point
-    long pen = long(x) * 64;
-    FT_UInt previous = 0;
-    for (char32_t code : codePoints(text)) {
-        const FT_UInt glyph = FT_Get_Char_Index(f, code);
-        if (previous && glyph && FT_HAS_KERNING(f)) {
-            FT_Vector kern;
-            if (FT_Get_Kerning(f, previous, glyph, FT_KERNING_DEFAULT, &kern) == 0) pen += kern.x;
-        }
-        previous = glyph;
-        if (FT_Load_Glyph(f, glyph, FT_LOAD_RENDER) != 0) continue;
-        const FT_GlyphSlot g = f->glyph;
+    const int baseline = y + int((mFace->face->size->metrics.ascender + 32) >> 6);
+    const long width = layOut(mFace->face, text, FT_LOAD_RENDER, [&](FT_GlyphSlot g, long pen) {
         const FT_Bitmap& bitmap = g->bitmap;
-        const int left = int((pen + 32) >> 6) + g->bitmap_left;
-        const int top = int((baseline + 32) >> 6) - g->bitmap_top;
-        if (bitmap.pixel_mode == FT_PIXEL_MODE_GRAY)
-            for (unsigned r = 0; r < bitmap.rows; ++r)
-                for (unsigned c = 0; c < bitmap.width; ++c) {
-                    const unsigned char a = bitmap.buffer[std::ptrdiff_t(r) * bitmap.pitch + c];
-                    if (a) image.blend(left + int(c), top + int(r), color, a / 255.0);
-                }
-        pen += g->advance.x;
-    }
-    return int((pen - long(x) * 64 + 63) >> 6);
+        if (bitmap.pixel_mode != FT_PIXEL_MODE_GRAY) return;
+        const int left = x + int((pen + 32) >> 6) + g->bitmap_left, top = baseline - g->bitmap_top;
+        for (unsigned r = 0; r < bitmap.rows; ++r)
+            for (unsigned c = 0; c < bitmap.width; ++c) {
+                const unsigned char a = bitmap.buffer[std::ptrdiff_t(r) * bitmap.pitch + c];
+                if (a) image.blend(left + int(c), top + int(r), color, a / 255.0);
+            }
+    });
+    return int((width + 63) >> 6);
 }
 
 FontResult findFont(const FontOptions& options)

@@ -37,6 +37,9 @@ void fillRect(RgbImage& image, int x0, int y0, int x1, int y1, Rgb8 c);  ///< [x
 /// centres at +0.5).
 void drawLine(RgbImage& image, double x0, double y0, double x1, double y1, Rgb8 c, double width = 1.0);
 
+/// Splits UTF-8 text into code points; a malformed byte counts as one character, U+FFFD.
+std::vector<char32_t> decodeUtf8(const std::string& text);
+
 /// Text in a built-in 5×7 bitmap font (digits, letters A–Z/a–z, space and . , - + ( ) / : % _ =
 /// ×; other characters as a box), each font pixel drawn as scale×scale pixels, top-left at
 /// (x, y). Returns the width drawn, in pixels.
