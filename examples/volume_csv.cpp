@@ -15,22 +15,22 @@ int main(int argc, char** argv)
     }
     try {
         const msii::TriMesh mesh = msii::readMesh(argv[1]).mesh;
-        msii::ComputeOptions options;
+        msii::InvariantsOptions options;
         options.radius = std::atof(argv[2]);
         options.scales = 16;
         options.computeSphere = options.computePatch = options.computeLine = false;  // V only
-        const msii::ComputeResult result = msii::computeInvariants(mesh, options);
+        const msii::InvariantsResult result = msii::computeInvariants(mesh, options);
 
         std::ofstream csv(argv[3]);
         csv << "vertex";
-        for (double r : result.invariants.radii) csv << ",V_r" << r;
+        for (double r : result.plan.radii) csv << ",V_r" << r;
         csv << '\n';
         for (std::size_t i = 0; i < mesh.numVertices(); ++i) {
             csv << i;
-            for (const auto& column : result.invariants.volume) csv << ',' << column[i];  // NaN: masked
+            for (const auto& column : result.features[msii::Invariant::Volume]) csv << ',' << column[i];  // NaN: masked
             csv << '\n';
         }
-        std::fprintf(stderr, "%zu vertices, %zu radii -> %s\n", mesh.numVertices(), result.invariants.radii.size(), argv[3]);
+        std::fprintf(stderr, "%zu vertices, %zu radii -> %s\n", mesh.numVertices(), result.plan.radii.size(), argv[3]);
         return csv ? 0 : 1;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "volume_csv: error: %s\n", e.what());

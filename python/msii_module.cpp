@@ -5,11 +5,14 @@
 /// bit. The computation runs without the GIL; Ctrl-C cancels it (KeyboardInterrupt) through
 /// the engine's progress listener (core/progress.h), which also feeds `progress`.
 #include <msii/core/errors.h>
-#include <msii/core/progress.h>
+#include <msii/core/run_context.h>
 #include <msii/core/version.h>
 #include <msii/invariants/compute.h>
 #include <msii/invariants/scales.h>
 #include <msii/io/write_ply.h>
+#include <msii/map/feature_map.h>
+#include <msii/map/map_frame.h>
+#include <msii/map/rasterize.h>
 #include <msii/mesh/prepare_mesh.h>
 #include <msii/mesh/read_mesh.h>
 #include <msii/metrics/feature_metrics.h>
@@ -21,6 +24,8 @@
 
 #include <tbb/global_control.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <optional>
@@ -32,11 +37,10 @@ using namespace msii;
 
 namespace {
 
-/// Thrown from the progress listener to unwind the engine when Python wants to stop (a
-/// signal such as Ctrl-C, or an exception raised by the progress callable). The Python
-/// error itself travels in `PendingError`, fetched in the thread that saw it and restored in
-/// the calling thread.
-struct Cancelled {};
+/// When Python wants to stop (a signal such as Ctrl-C, or an exception raised by the
+/// progress callable), the RunContext's listener throws msii::Cancelled to unwind the
+/// engine. The Python error itself travels in `PendingError`, fetched in the thread that saw
+/// it and restored in the calling thread.
 
 struct PendingError {
     PyObject *type = nullptr, *value = nullptr, *traceback = nullptr;
@@ -151,16 +155,15 @@ py::object compute(const py::array& vertices, const py::array& faces, double rad
         throw py::value_error("progress must be a callable (stage, done, total) or None.");
 
     PendingError pending;
-    ComputeResult result;
+    InvariantsResult result;
     PrepareMeshResult prepared;
-    std::vector<PrepareChange> diagnostics;  // what preparation changed, then the computation's remarks
+    std::vector<Diagnostic> diagnostics;  // what preparation changed, then the computation's remarks
     {
         py::gil_scoped_release free;
         std::unique_ptr<tbb::global_control> limit;
         if (threads > 0)
             limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
-        Progress watch(false);
-        watch.setListener([&](const std::string& stage, std::size_t done, std::size_t total) {
+        RunContext watch([&](const ProgressUpdate& update) {
             py::gil_scoped_acquire hold;
             if (PyErr_CheckSignals() != 0) {  // Ctrl-C (in the main thread): KeyboardInterrupt
                 pending.fetch();
@@ -168,7 +171,7 @@ py::object compute(const py::array& vertices, const py::array& faces, double rad
             }
             if (!follow) return;
             try {
-                progress(stage, done, total);
+                progress(update.stage, update.done, update.total);
             } catch (py::error_already_set& e) {
                 e.restore();
                 pending.fetch();
@@ -181,7 +184,7 @@ py::object compute(const py::array& vertices, const py::array& faces, double rad
             po.radius = radius;
             prepared = prepareMesh(mesh, po);
             diagnostics = prepared.changes;
-            ComputeOptions o;
+            InvariantsOptions o;
             o.radius = radius;
             o.scales = scales;
             o.computeVolume = sel.v, o.computeSphere = sel.s, o.computePatch = sel.p, o.computeLine = sel.l;
@@ -196,26 +199,31 @@ py::object compute(const py::array& vertices, const py::array& faces, double rad
         } catch (const InvalidInputError& e) {
             throw py::value_error(e.what());
         }
-        for (const std::string& w : result.warnings) diagnostics.push_back({"computation", 0, w});
-        for (auto* columns : {&result.invariants.volume, &result.invariants.sphere, &result.patchLine.patch,
-                              &result.patchLine.line})
-            for (std::vector<float>& column : *columns) column = toInputVertices(prepared, column);
+        diagnostics.insert(diagnostics.end(), result.diagnostics.begin(), result.diagnostics.end());
+        for (FeatureColumns& columns : result.features.columns)
+            for (std::vector<float>& column : columns) column = toInputVertices(prepared, column);
     }
     py::dict out;
-    out["V"] = featureArray(result.invariants.volume);
-    out["S"] = featureArray(result.invariants.sphere);
-    out["P"] = featureArray(result.patchLine.patch);
-    out["L"] = featureArray(result.patchLine.line);
-    out["radii"] = py::array_t<double>(py::ssize_t(result.invariants.radii.size()), result.invariants.radii.data());
-    out["voxel_size"] = result.voxelSize;
-    out["levels"] = result.invariants.levelOfRadius;
+    for (Invariant i : kAllInvariants)
+        out[std::string(1, invariantLetter(i)).c_str()] = featureArray(result.features[i]);
+    const ScalePlan& plan = result.plan;
+    out["radii"] = py::array_t<double>(py::ssize_t(plan.radii.size()), plan.radii.data());
+    out["voxel_size"] = plan.voxelSize;
+    out["levels"] = plan.volumeSphereLevels;
+    out["sample_levels"] = plan.patchLineLevels;
+    out["reach"] = plan.reach;
     out["exact"] = exact;
-    // Diagnostics as objects: kind (e.g. "duplicate_faces_removed", "holes_filled",
-    // "computation"), count (of faces, holes, vertices ...; 0 for remarks) and message.
+    // Diagnostics as objects (core/diagnostics.h): kind (e.g. "duplicate_faces_removed",
+    // "holes_filled", "mostly_masked"), count (of faces, holes, vertices ...; 0 if nothing),
+    // figures (a dict of further numbers) and message.
     const py::object record = py::module_::import("types").attr("SimpleNamespace");
     py::list warnings;
-    for (const PrepareChange& d : diagnostics)
-        warnings.append(record(py::arg("kind") = d.kind, py::arg("count") = d.count, py::arg("message") = d.message));
+    for (const Diagnostic& d : diagnostics) {
+        py::dict figures;
+        for (const auto& [name, value] : d.figures) figures[name.c_str()] = value;
+        warnings.append(record(py::arg("kind") = d.kind, py::arg("count") = d.count, py::arg("figures") = figures,
+                               py::arg("message") = d.message));
+    }
     out["warnings"] = warnings;
     return record(**out);
 }
@@ -246,7 +254,8 @@ void writePlyArrays(const std::string& path, const py::array& vertices, const py
     std::vector<VertexProperty> props;
     for (const auto& [key, value] : properties) {
         const std::string name = py::str(key);
-        const py::array_t<float, py::array::forcecast> a = py::array_t<float, py::array::forcecast>::ensure(value);
+        const py::array_t<float, py::array::c_style | py::array::forcecast> a =
+            py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(value);
         if (!a || a.ndim() != 1 || std::size_t(a.shape(0)) != mesh.numVertices())
             throw py::value_error("property '" + name + "' must be an array of one value per vertex (" +
                                   std::to_string(mesh.numVertices()) + ").");
@@ -351,6 +360,94 @@ py::array_t<float> smooth(const py::array& vertices, const py::array& faces, con
     return out;
 }
 
+/// The map of msii map, in memory: the mesh projected orthographically onto a frame, with
+/// height, normal, mask and each given per-vertex property per pixel (map/feature_map.h),
+/// the values an EXR written by msii map holds.
+py::object featureMap(const py::array& vertices, const py::array& faces, const py::dict& properties,
+                      const std::string& view, double pixelSize, int longerSide)
+{
+    const TriMesh mesh = meshOf(vertices, faces);
+    std::vector<VertexProperty> props;
+    for (const auto& [key, value] : properties) {
+        const std::string name = py::str(key);
+        const py::array_t<float, py::array::c_style | py::array::forcecast> a =
+            py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(value);
+        if (!a || a.ndim() != 1 || std::size_t(a.shape(0)) != mesh.numVertices())
+            throw py::value_error("property '" + name + "' must be an array of one value per vertex (" +
+                                  std::to_string(mesh.numVertices()) + ").");
+        props.push_back({name, std::vector<float>(a.data(), a.data() + a.shape(0))});
+    }
+    MapFrameOptions fo;
+    parseMapView(view, fo);
+    if (pixelSize > 0 && longerSide > 0) throw py::value_error("give pixel_size or longer_side, not both.");
+    if (pixelSize < 0 || longerSide < 0) throw py::value_error("pixel_size and longer_side must be positive.");
+    if (pixelSize > 0) fo.pixelSize = pixelSize;
+    else fo.longerSidePixels = longerSide > 0 ? longerSide : 2048;  // msii map's default
+
+    MapFrame frame;
+    PixelHits hits;
+    std::array<std::vector<float>, 3> normal;
+    std::vector<std::vector<float>> channels(props.size());
+    {
+        py::gil_scoped_release free;
+        frame = makeMapFrame(mesh, fo);
+        hits = rasterize(mesh, frame);
+        const std::array<std::vector<float>, 3> vn = vertexNormalsInFrame(mesh, frame);
+        for (int c = 0; c < 3; ++c) normal[std::size_t(c)] = interpolateToPixels(mesh, hits, vn[std::size_t(c)]);
+        // Unit length per pixel, as in the EXR (NaN where the interpolated normal vanishes).
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        for (std::size_t k = 0; k < hits.triangle.size(); ++k) {
+            const float x = normal[0][k], y = normal[1][k], z = normal[2][k], len = std::sqrt(x * x + y * y + z * z);
+            for (auto& n : normal) n[k] = len > 0 ? n[k] / len : nan;
+        }
+        for (std::size_t q = 0; q < props.size(); ++q) channels[q] = interpolateToPixels(mesh, hits, props[q].values);
+    }
+    const py::ssize_t h = frame.height, w = frame.width;
+    const auto image = [&](const std::vector<float>& values) {
+        py::array_t<float> a({h, w});
+        std::copy(values.begin(), values.end(), a.mutable_data());
+        return a;
+    };
+    py::array_t<float> normals({h, w, py::ssize_t(3)});
+    float* dst = normals.mutable_data();
+    for (std::size_t k = 0; k < hits.triangle.size(); ++k)
+        for (std::size_t c = 0; c < 3; ++c) dst[3 * k + c] = normal[c][k];
+    py::array_t<bool> mask({h, w});
+    for (std::size_t k = 0; k < hits.triangle.size(); ++k) mask.mutable_data()[k] = hits.triangle[k] != PixelHits::kNone;
+    py::dict values;
+    for (std::size_t q = 0; q < props.size(); ++q) values[props[q].name.c_str()] = image(channels[q]);
+    const auto vec = [](const Vec3& v) { return py::make_tuple(v.x, v.y, v.z); };
+    const py::object record = py::module_::import("types").attr("SimpleNamespace");
+    return record(py::arg("height") = image(hits.depth), py::arg("normal") = normals, py::arg("mask") = mask,
+                  py::arg("values") = values, py::arg("pixel_size") = frame.pixelSize,
+                  py::arg("origin") = vec(frame.origin), py::arg("axis_u") = vec(frame.axisU),
+                  py::arg("axis_v") = vec(frame.axisV), py::arg("axis_normal") = vec(frame.normal),
+                  py::arg("min_u") = frame.minU, py::arg("max_v") = frame.maxV, py::arg("view") = mapViewName(frame));
+}
+
+/// An EXR feature map (msii map) read back: every channel as (h, w) float32, and the frame.
+py::object readFeatureMapArrays(const std::string& path)
+{
+    FeatureMapImage map;
+    {
+        py::gil_scoped_release free;
+        map = readFeatureMap(path);
+    }
+    py::dict channels;
+    for (const auto& [name, values] : map.channels) {
+        py::array_t<float> a({py::ssize_t(map.height), py::ssize_t(map.width)});
+        std::copy(values.begin(), values.end(), a.mutable_data());
+        channels[name.c_str()] = a;
+    }
+    const auto vec = [](const Vec3& v) { return py::make_tuple(v.x, v.y, v.z); };
+    const py::object record = py::module_::import("types").attr("SimpleNamespace");
+    return record(py::arg("channels") = channels, py::arg("pixel_size") = map.frame.pixelSize,
+                  py::arg("origin") = vec(map.frame.origin), py::arg("axis_u") = vec(map.frame.axisU),
+                  py::arg("axis_v") = vec(map.frame.axisV), py::arg("axis_normal") = vec(map.frame.normal),
+                  py::arg("min_u") = map.frame.minU, py::arg("max_v") = map.frame.maxV, py::arg("units") = map.units,
+                  py::arg("radii") = map.radii);
+}
+
 } // namespace
 
 PYBIND11_MODULE(msii, m)
@@ -384,6 +481,17 @@ PYBIND11_MODULE(msii, m)
           py::arg("filter") = "mean",
           "Fast 1-ring smoothing (paper Sec. 3.2) of values (n,) or each column of (n, k), as msii smooth: "
           "filter \"mean\" or \"median\", iterations passes. float32, same shape.");
+    m.def("feature_map", &featureMap, py::arg("vertices"), py::arg("faces"), py::arg("values") = py::dict(),
+          py::arg("view") = "best", py::arg("pixel_size") = 0.0, py::arg("longer_side") = 0,
+          "The mesh projected orthographically, as msii map writes it to EXR: height (h, w) over the plane "
+          "towards the viewer, normal (h, w, 3) in the map frame, mask (h, w) bool, values {name: (h, w)} "
+          "interpolated from {name: array of n values}, NaN off the mesh; and the frame (pixel_size, origin, "
+          "axis_u, axis_v, axis_normal, min_u, max_v: pixel (x, y) is at u = min_u + (x + 0.5) pixel_size, "
+          "v = max_v - (y + 0.5) pixel_size). view: best, +x, -x, +y, -y, +z, -z or \"X,Y,Z\"; resolution: "
+          "pixel_size (mesh units) or longer_side (pixels, default 2048).");
+    m.def("read_feature_map", &readFeatureMapArrays, py::arg("path"),
+          "Reads an EXR feature map (msii map): channels {name: (h, w) float32} and the frame, units and radii "
+          "from its header.");
     m.def("write_ply", &writePlyArrays, py::arg("path"), py::arg("vertices"), py::arg("faces"),
           py::arg("properties") = py::dict(),
           "Writes a binary PLY with per-vertex float properties {name: array of n values}, atomically.");

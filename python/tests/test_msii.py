@@ -161,6 +161,10 @@ def test_write_ply_round_trip(tmp_path):
     v, f = msii.read_mesh(str(path))
     assert np.array_equal(v, vertices) and np.array_equal(f, faces)
     assert np.array_equal(read_ply(path)["quality"], np.array([0.5, 1, 2, 3], np.float32))
+    # A column of a 2-D array (strided, as result.V[:, j]) is written as its values.
+    table = np.arange(12, dtype=np.float32).reshape(4, 3)
+    msii.write_ply(str(path), vertices, faces, {"column": table[:, 2]})
+    assert np.array_equal(read_ply(path)["column"], table[:, 2])
     with pytest.raises(ValueError, match="one value per vertex"):
         msii.write_ply(str(path), vertices, faces, {"q": np.zeros(3)})
 
@@ -223,3 +227,45 @@ def test_warnings_are_objects_with_kind_count_and_message(tablet):
     clean = msii.compute(vertices, faces, 0.8, scales=4, invariants="V")
     assert not any("duplicate" in w.kind for w in clean.warnings)
     assert np.array_equal(clean.V, r.V, equal_nan=True)  # the repaired mesh gives the same values
+
+
+def test_warnings_carry_codes_and_figures(tmp_path):
+    # A small open patch with a large radius: most vertices masked, coded "mostly_masked"
+    # with its figures, in a sentence that names no command-line flag.
+    scan = tmp_path / "plate.ply"
+    subprocess.run([SAMPLES, "tablet", "--width", "3", "--height", "2", "--spacing", "0.1", "-q", "-o", str(scan)],
+                   check=True)
+    vertices, faces = msii.read_mesh(str(scan))
+    r = msii.compute(vertices, faces, 1.5, scales=4, invariants="V")
+    masked = [w for w in r.warnings if w.kind == "mostly_masked"]
+    assert len(masked) == 1, [w.kind for w in r.warnings]
+    w = masked[0]
+    assert w.figures["largest_radius"] == pytest.approx(1.5)
+    share = float(np.mean(np.isnan(r.V[:, -1])))
+    assert w.figures["masked_share"] == pytest.approx(share, abs=0.02)  # of the prepared mesh's vertices
+    assert w.count > len(vertices) / 2
+    assert "--" not in w.message
+
+
+def test_feature_map_equals_the_exr_of_msii_map(tablet, tmp_path):
+    vertices, faces = msii.read_mesh(str(tablet))
+    r = msii.compute(vertices, faces, 0.8, scales=4, invariants="V")
+    features = tmp_path / "scan.msii.ply"
+    subprocess.run([MSII, "compute", str(tablet), "-r", "0.8", "-n", "4", "--invariants", "V", "-q",
+                    "-o", str(features)], check=True)
+    exr = tmp_path / "scan.map.exr"
+    subprocess.run([MSII, "map", str(features), "--view", "+z", "--pixels", "300", "-q", "-o", str(exr)], check=True)
+    m = msii.feature_map(vertices, faces, {"V_04": r.V[:, 3]}, view="+z", longer_side=300)
+    got = msii.read_feature_map(str(exr))
+    assert m.height.shape == got.channels["height"].shape and max(m.height.shape) == 300
+    assert m.pixel_size == pytest.approx(got.pixel_size, rel=1e-12)
+    assert np.array_equal(m.height, got.channels["height"], equal_nan=True)
+    assert np.array_equal(m.mask, got.channels["mask"] == 1)
+    for c, axis in enumerate("xyz"):
+        assert np.array_equal(m.normal[:, :, c], got.channels["normal." + axis], equal_nan=True)
+    assert np.array_equal(m.values["V_04"], got.channels["V_04"], equal_nan=True)
+    assert m.mask.sum() > 0.5 * m.mask.size and np.isfinite(m.values["V_04"][m.mask]).any()
+    with pytest.raises(ValueError, match="one value per vertex"):
+        msii.feature_map(vertices, faces, {"q": r.V[:10, 0]})
+    with pytest.raises(ValueError, match="not both"):
+        msii.feature_map(vertices, faces, pixel_size=0.1, longer_side=100)

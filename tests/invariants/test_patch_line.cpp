@@ -6,6 +6,8 @@
 // what it gives (stated at the assertion), so that it still catches a loss of accuracy;
 // docs/accuracy.md gives the figures.
 #include <msii/invariants/compute.h>
+#include <msii/invariants/patch_line.h>
+#include <msii/invariants/volume_sphere.h>
 #include <msii/core/errors.h>
 #include <msii/invariants/exact.h>
 #include <msii/invariants/scales.h>
@@ -32,9 +34,9 @@ struct Errors {
     std::size_t checked = 0;
 };
 
-ComputeOptions patchLineOnly(double radius)
+InvariantsOptions patchLineOnly(double radius)
 {
-    ComputeOptions o;
+    InvariantsOptions o;
     o.radius = radius;
     o.computeVolume = o.computeSphere = false;
     return o;
@@ -42,13 +44,17 @@ ComputeOptions patchLineOnly(double radius)
 
 /// Max and mean |value − expected| per radius over all unmasked vertices, printed, and
 /// their maxima over radii >= 3 median edges.
-Errors compare(const ComputeResult& res, const std::function<double(double)>& expectP,
+Errors compare(const InvariantsResult& res, const std::function<double(double)>& expectP,
                const std::function<double(double)>& expectL, const char* title)
 {
     Errors e;
-    const auto& pl = res.patchLine;
+    const struct {
+        const std::vector<double>& radii;
+        const FeatureColumns &patch, &line;
+        const std::vector<int>& levelOfRadius;
+    } pl{res.plan.radii, res.features[Invariant::Patch], res.features[Invariant::Line], res.plan.patchLineLevels};
     std::printf("%s: median edge %.4f, cell %.4f\n   r      level  max|dP|   mean      max|dL|   mean\n",
-                title, res.stats.medianEdge, res.voxelSize);
+                title, res.stats.medianEdge, res.plan.voxelSize);
     for (std::size_t j = 0; j < pl.radii.size(); ++j) {
         const double r = pl.radii[j];
         double mp = 0, ml = 0, sp = 0, sl = 0;
@@ -90,12 +96,12 @@ TriMesh exactTestTablet()
 
 /// 200 random vertices (seed 7) away from the border: beyond P and L's mask at R,
 /// R + max(4w, 4h) + 2h0 with w <= 1.5h on the coarsest level h of V and S.
-std::vector<std::uint32_t> centralVertices(const TriMesh& mesh, const ComputeResult& fast, const ComputeOptions& co)
+std::vector<std::uint32_t> centralVertices(const TriMesh& mesh, const InvariantsResult& fast, const InvariantsOptions& co)
 {
     const std::vector<double> border = borderDistance(mesh, fast.check.borderEdges, 4 * co.radius);
-    const auto levels = gridLevelOfRadius(equidistantRadii(co.radius, co.scales), fast.voxelSize, co.minVoxelsPerRadius);
-    const double coarsest = fast.voxelSize * double(1 << levels.back());
-    const double unmasked = co.radius + 6 * coarsest + 2 * fast.voxelSize;
+    const auto levels = gridLevelOfRadius(equidistantRadii(co.radius, co.scales), fast.plan.voxelSize, co.minVoxelsPerRadius);
+    const double coarsest = fast.plan.voxelSize * double(1 << levels.back());
+    const double unmasked = co.radius + 6 * coarsest + 2 * fast.plan.voxelSize;
     std::mt19937 rng(7);
     std::vector<std::uint32_t> vertices;
     while (vertices.size() < 200) {
@@ -147,17 +153,17 @@ AgainstExact compareWithExact(const std::vector<const std::vector<std::vector<fl
 
 /// P and L alone on the tablet at `--pl-precision` @p precision against the exact mode at
 /// its central vertices (worst over radii >= 3 median edges); @p fast receives the run.
-AgainstExact patchLineAgainstExact(TriMesh& mesh, double precision, ComputeResult& fast)
+AgainstExact patchLineAgainstExact(TriMesh& mesh, double precision, InvariantsResult& fast)
 {
-    ComputeOptions co = patchLineOnly(2.4);
+    InvariantsOptions co = patchLineOnly(2.4);
     co.patchLinePrecision = precision;
     fast = computeInvariants(mesh, co);
     ExactOptions eo;
-    eo.radii = fast.patchLine.radii;
+    eo.radii = fast.plan.radii;
     eo.computeVolumeSphere = false;
     eo.vertices = centralVertices(mesh, fast, co);
     const ExactResult exact = computeExact(mesh, eo);
-    return compareWithExact({&fast.patchLine.patch, &fast.patchLine.line}, {&exact.patch, &exact.line}, exact,
+    return compareWithExact({&fast.features[Invariant::Patch], &fast.features[Invariant::Line]}, {&exact.patch, &exact.line}, exact,
                             3 * fast.stats.medianEdge, false);
 }
 
@@ -170,7 +176,7 @@ TEST(PatchLine, FlatPlaneIsOne)
     ho.width = ho.height = 10;
     ho.spacing = 0.1;
     TriMesh mesh = samples::makeHeightField(ho);
-    const ComputeResult res = computeInvariants(mesh, patchLineOnly(2.0));
+    const InvariantsResult res = computeInvariants(mesh, patchLineOnly(2.0));
     const Errors e = compare(res, [](double) { return 1.0; }, [](double) { return 1.0; }, "plane");
     ASSERT_GE(e.checked, 10u);
     // The per-radius errors are printed.
@@ -189,7 +195,7 @@ TEST(PatchLine, SphereAndCavityMatchClosedForms)
         so.cavity = cavity;
         TriMesh mesh = samples::makeSphere(so);
         ASSERT_GE(mesh.numVertices(), 40000u);
-        const ComputeResult res = computeInvariants(mesh, patchLineOnly(4.0));
+        const InvariantsResult res = computeInvariants(mesh, patchLineOnly(4.0));
         // P̂ = 1 and L̂ = sqrt(1 − r²/4R²) for both (docs/method.md, Closed forms).
         const Errors e = compare(
             res, [](double) { return 1.0; },
@@ -209,7 +215,7 @@ TEST(PatchLine, CubeCornerAndEdge)
     co.side = 10;
     co.spacing = 0.25;
     TriMesh mesh = samples::makeCube(co);
-    const ComputeResult res = computeInvariants(mesh, patchLineOnly(2.0));
+    const InvariantsResult res = computeInvariants(mesh, patchLineOnly(2.0));
     std::size_t corner = mesh.numVertices(), edge = mesh.numVertices();
     double bestEdge = 1e9;
     for (std::size_t i = 0; i < mesh.numVertices(); ++i) {
@@ -220,7 +226,11 @@ TEST(PatchLine, CubeCornerAndEdge)
     }
     ASSERT_LT(corner, mesh.numVertices());
     ASSERT_LT(bestEdge, 0.3);
-    const auto& pl = res.patchLine;
+    const struct {
+        const std::vector<double>& radii;
+        const FeatureColumns &patch, &line;
+        const std::vector<int>& levelOfRadius;
+    } pl{res.plan.radii, res.features[Invariant::Patch], res.features[Invariant::Line], res.plan.patchLineLevels};
     double maxCorner = 0, maxEdge = 0;
     std::size_t checked = 0;
     for (std::size_t j = 0; j < pl.radii.size(); ++j) {
@@ -247,18 +257,18 @@ TEST(PatchLine, TabletAgainstExactMode)
 {
     TriMesh mesh = exactTestTablet();
     ASSERT_GE(mesh.numVertices(), 50000u);
-    ComputeOptions co;
+    InvariantsOptions co;
     co.radius = 2.4;  // ≈ 30 median edges
-    const ComputeResult fast = computeInvariants(mesh, co);
+    const InvariantsResult fast = computeInvariants(mesh, co);
     ExactOptions eo;
-    eo.radii = fast.invariants.radii;
+    eo.radii = fast.plan.radii;
     eo.vertices = centralVertices(mesh, fast, co);
     const ExactResult exact = computeExact(mesh, eo);
     std::printf("fast vs exact, tablet %zu vertices, R %.2f, 200 vertices\n"
                 "   r      mean|dV| max|dV|  mean|dS| max|dS|  mean|dP| max|dP|  mean|dL| max|dL|\n",
                 mesh.numVertices(), co.radius);
     const AgainstExact e = compareWithExact(
-        {&fast.invariants.volume, &fast.invariants.sphere, &fast.patchLine.patch, &fast.patchLine.line},
+        {&fast.features[Invariant::Volume], &fast.features[Invariant::Sphere], &fast.features[Invariant::Patch], &fast.features[Invariant::Line]},
         {&exact.volume, &exact.sphere, &exact.patch, &exact.line}, exact, 3 * fast.stats.medianEdge, true);
     ASSERT_EQ(e.nans, 0u);
     const auto& worstMean = e.worstMean;
@@ -274,14 +284,14 @@ TEST(PatchLine, TabletAgainstExactMode)
     // square-root onset (a sphere becoming tangent to a facet), which grows with the
     // kernel's width in mm, and the fit from the samples of coarse levels to the vertices.
     // R = 2.4 alone would start level 3; it joins level 2 (patchLineLevelOfRadius).
-    EXPECT_EQ(fast.patchLine.levelOfRadius.back(), 2);
+    EXPECT_EQ(fast.plan.patchLineLevels.back(), 2);
     EXPECT_LE(worstMean[2], 1e-3);
     EXPECT_LE(worstMax[2], 1e-2);
     EXPECT_LE(worstMean[3], 3.2e-3);
     EXPECT_LE(worstMax[3], 3.5e-2);
 }
 
-// With 12 cells per radius for P and L alone (ComputeOptions::patchLinePrecision,
+// With 12 cells per radius for P and L alone (InvariantsOptions::patchLinePrecision,
 // `--pl-precision 12`), twice the 6 cells of `--precision`, P's differences from the exact
 // mode on the tablet are half those at 6 (worst mean 3.5e-4, max 5.3e-3); L's fall less
 // (2.1e-3, max 2.9e-2): its largest differences are at the first radii, on the finest
@@ -289,11 +299,11 @@ TEST(PatchLine, TabletAgainstExactMode)
 TEST(PatchLine, TabletPatchAtTwelveCellsPerRadius)
 {
     TriMesh mesh = exactTestTablet();
-    ComputeResult fast;
+    InvariantsResult fast;
     const AgainstExact e = patchLineAgainstExact(mesh, 12, fast);
-    for (std::size_t j = 0; j < fast.patchLine.radii.size(); ++j)
-        EXPECT_EQ(fast.patchLine.levelOfRadius[j], gridLevelOfRadius({fast.patchLine.radii[j]}, fast.voxelSize, 12).front())
-            << "r = " << fast.patchLine.radii[j];  // (R is on level 2 with r/h = 12: not merged)
+    for (std::size_t j = 0; j < fast.plan.radii.size(); ++j)
+        EXPECT_EQ(fast.plan.patchLineLevels[j], gridLevelOfRadius({fast.plan.radii[j]}, fast.plan.voxelSize, 12).front())
+            << "r = " << fast.plan.radii[j];  // (R is on level 2 with r/h = 12: not merged)
     ASSERT_EQ(e.nans, 0u);
     const auto& worstMean = e.worstMean;
     const auto& worstMax = e.worstMax;
@@ -315,7 +325,7 @@ TEST(PatchLine, TabletDifferencesFallWithPrecision)
     TriMesh mesh = exactTestTablet();
     std::vector<AgainstExact> sweep;
     for (double precision : {6.0, 7.0, 8.0, 10.0}) {
-        ComputeResult fast;
+        InvariantsResult fast;
         sweep.push_back(patchLineAgainstExact(mesh, precision, fast));
         ASSERT_EQ(sweep.back().nans, 0u);
         std::printf("precision %4.1f for P and L: worst mean |dP| %.2e, max %.1e; |dL| %.2e, max %.1e\n", precision,
@@ -356,13 +366,21 @@ TEST(PatchLine, SameResultsForOneAndTwoThreads)
     ho.width = ho.height = 6;
     ho.spacing = 0.05;
     TriMesh mesh = samples::makeHeightField(ho);
-    std::vector<ComputeResult> results;
+    std::vector<InvariantsResult> results;
     for (const int threads : {1, 2}) {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
         results.push_back(computeInvariants(mesh, patchLineOnly(1.0)));
     }
-    const auto& a = results[0].patchLine;
-    const auto& b = results[1].patchLine;
+    const struct {
+        const std::vector<double>& radii;
+        const FeatureColumns &patch, &line;
+        const std::vector<int>& levelOfRadius;
+    } a{results[0].plan.radii, results[0].features[Invariant::Patch], results[0].features[Invariant::Line], results[0].plan.patchLineLevels};
+    const struct {
+        const std::vector<double>& radii;
+        const FeatureColumns &patch, &line;
+        const std::vector<int>& levelOfRadius;
+    } b{results[1].plan.radii, results[1].features[Invariant::Patch], results[1].features[Invariant::Line], results[1].plan.patchLineLevels};
     ASSERT_EQ(a.patch.size(), b.patch.size());
     std::size_t finite = 0;
     for (std::size_t j = 0; j < a.patch.size(); ++j)

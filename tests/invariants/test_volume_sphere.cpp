@@ -2,6 +2,8 @@
 // properties they must have: rigid-motion invariance, open patch = closed slab away from
 // the border, border masking, thread-count independence.
 #include <msii/invariants/compute.h>
+#include <msii/invariants/patch_line.h>
+#include <msii/invariants/volume_sphere.h>
 #include <msii/samples/generators.h>
 
 #include <gtest/gtest.h>
@@ -31,14 +33,19 @@ struct ErrorTable {
 };
 
 /// Max |value − expected| per radius over the given vertices, for radii >= 3 median edges.
-ErrorTable compare(const ComputeResult& res, const std::vector<std::size_t>& vertices,
+ErrorTable compare(const InvariantsResult& res, const std::vector<std::size_t>& vertices,
                    const std::function<double(double)>& expectV,
                    const std::function<double(double)>& expectS, const char* title)
 {
     ErrorTable t;
-    const auto& inv = res.invariants;
+    const struct {
+        const std::vector<double>& radii;
+        const FeatureColumns &volume, &sphere;
+        const std::vector<int>& levelOfRadius;
+    } inv{res.plan.radii, res.features[Invariant::Volume], res.features[Invariant::Sphere],
+          res.plan.volumeSphereLevels};
     std::printf("%s: median edge %.4f, voxel %.4f, %d levels\n", title, res.stats.medianEdge,
-                res.voxelSize, inv.numLevels);
+                res.plan.voxelSize, res.plan.numVolumeSphereLevels());
     std::printf("   r      level  max|dV|    max|dS|\n");
     for (std::size_t j = 0; j < inv.radii.size(); ++j) {
         const double r = inv.radii[j];
@@ -91,9 +98,9 @@ TriMesh flatPatch()
     return samples::makeHeightField(ho);
 }
 
-ComputeOptions sphereOptions()
+InvariantsOptions sphereOptions()
 {
-    ComputeOptions o;
+    InvariantsOptions o;
     o.radius = 4.0;
     o.scales = 16;
     return o;
@@ -105,7 +112,7 @@ TEST(VolumeSphere, ConvexSphereMatchesClosedForm)
 {
     TriMesh mesh = testSphere(false);
     ASSERT_GE(mesh.numVertices(), 40000u);
-    const ComputeResult res = computeInvariants(mesh, sphereOptions());
+    const InvariantsResult res = computeInvariants(mesh, sphereOptions());
     const double R = 10.0;
     const auto t = compare(
         res, allVertices(mesh), [&](double r) { return 0.5 - 3 * r / (16 * R); },
@@ -120,7 +127,7 @@ TEST(VolumeSphere, ConvexSphereMatchesClosedForm)
 TEST(VolumeSphere, SphericalCavityMatchesClosedForm)
 {
     TriMesh mesh = testSphere(true);
-    const ComputeResult res = computeInvariants(mesh, sphereOptions());
+    const InvariantsResult res = computeInvariants(mesh, sphereOptions());
     const double R = 10.0;
     const auto t = compare(
         res, allVertices(mesh), [&](double r) { return 0.5 + 3 * r / (16 * R); },
@@ -135,12 +142,12 @@ TEST(VolumeSphere, SphericalCavityMatchesClosedForm)
 TEST(VolumeSphere, FlatPlaneIsOneHalf)
 {
     TriMesh mesh = flatPatch();
-    ComputeOptions o;
+    InvariantsOptions o;
     o.radius = 2.0;
-    const ComputeResult res = computeInvariants(mesh, o);
+    const InvariantsResult res = computeInvariants(mesh, o);
     std::vector<std::size_t> interior;
     for (std::size_t i = 0; i < mesh.numVertices(); ++i)
-        if (!std::isnan(res.invariants.volume.back()[i])) interior.push_back(i);
+        if (!std::isnan(res.features[Invariant::Volume].back()[i])) interior.push_back(i);
     // Border vertices are masked; the middle is not.
     EXPECT_GT(interior.size(), mesh.numVertices() / 10);
     EXPECT_LT(interior.size(), mesh.numVertices());
@@ -156,30 +163,39 @@ TEST(VolumeSphere, MostlyMaskedPatchIsReported)
 {
     // The rule: more than half masked at the largest radius; names the largest radius with
     // at least half unmasked.
-    EXPECT_EQ(mostlyMaskedWarning({1, 2, 3}, {5, 5, 5}, 10), "");
-    const std::string some = mostlyMaskedWarning({1, 2, 3}, {0, 3, 6}, 10);
-    EXPECT_NE(some.find("60 % of the vertices are masked"), std::string::npos) << some;
-    EXPECT_NE(some.find("at r = 2 at least half"), std::string::npos) << some;
-    const std::string all = mostlyMaskedWarning({1, 2, 3}, {6, 7, 8}, 10);
-    EXPECT_NE(all.find("even at the smallest radius"), std::string::npos) << all;
+    EXPECT_FALSE(mostlyMasked({1, 2, 3}, {5, 5, 5}, 10).has_value());
+    const std::optional<Diagnostic> some = mostlyMasked({1, 2, 3}, {0, 3, 6}, 10);
+    ASSERT_TRUE(some.has_value());
+    EXPECT_EQ(some->kind, "mostly_masked");
+    EXPECT_EQ(some->count, 6u);
+    EXPECT_DOUBLE_EQ(some->figure("masked_share"), 0.6);
+    EXPECT_DOUBLE_EQ(some->figure("largest_radius"), 3.0);
+    EXPECT_DOUBLE_EQ(some->figure("radius_with_half"), 2.0);
+    EXPECT_NE(some->message.find("60 % of the vertices are masked"), std::string::npos) << some->message;
+    EXPECT_NE(some->message.find("at r = 2 at least half"), std::string::npos) << some->message;
+    EXPECT_EQ(some->message.find("--"), std::string::npos) << "the engine names no flag: " << some->message;
+    const std::optional<Diagnostic> all = mostlyMasked({1, 2, 3}, {6, 7, 8}, 10);
+    ASSERT_TRUE(all.has_value());
+    EXPECT_DOUBLE_EQ(all->figure("radius_with_half", -1), 0.0);
+    EXPECT_NE(all->message.find("even at the smallest radius"), std::string::npos) << all->message;
 
     // A 12 mm patch: with R = 0.8 most vertices keep their values, with R = 3 the border band
     // covers most of it, and the radius named keeps at least half.
     for (const double radius : {0.8, 3.0}) {
         TriMesh mesh = flatPatch();
-        ComputeOptions o;
+        InvariantsOptions o;
         o.radius = radius;
         o.computePatch = o.computeLine = false;
-        const ComputeResult res = computeInvariants(mesh, o);
+        const InvariantsResult res = computeInvariants(mesh, o);
         const auto share = [&](std::size_t j) {
-            const auto& column = res.invariants.volume[j];
+            const auto& column = res.features[Invariant::Volume][j];
             return double(std::count_if(column.begin(), column.end(), [](float v) { return std::isnan(v); })) /
                    double(column.size());
         };
-        const std::size_t last = res.invariants.radii.size() - 1;
+        const std::size_t last = res.plan.radii.size() - 1;
         std::string warning;
-        for (const auto& w : res.warnings)
-            if (w.find("masked (NaN)") != std::string::npos) warning = w;
+        for (const Diagnostic& d : res.diagnostics)
+            if (d.kind == "mostly_masked") warning = d.message;
         SCOPED_TRACE("R = " + std::to_string(radius));
         if (radius < 1) {
             EXPECT_LT(share(last), 0.5);
@@ -192,7 +208,7 @@ TEST(VolumeSphere, MostlyMaskedPatchIsReported)
         while (named > 0 && share(named) > 0.5) --named;
         ASSERT_LE(share(named), 0.5);
         std::ostringstream r;
-        r << "at r = " << std::setprecision(3) << res.invariants.radii[named] << " at least half";
+        r << "at r = " << std::setprecision(3) << res.plan.radii[named] << " at least half";
         EXPECT_NE(warning.find(r.str()), std::string::npos) << warning;
     }
 }
@@ -203,9 +219,9 @@ TEST(VolumeSphere, CubeCornerAndEdge)
     co.side = 10;
     co.spacing = 0.2;
     TriMesh mesh = samples::makeCube(co);
-    ComputeOptions o;
+    InvariantsOptions o;
     o.radius = 2.0;
-    const ComputeResult res = computeInvariants(mesh, o);
+    const InvariantsResult res = computeInvariants(mesh, o);
     std::size_t corner = SIZE_MAX, edge = SIZE_MAX;
     double bestEdge = 1e9;
     for (std::size_t i = 0; i < mesh.numVertices(); ++i) {
@@ -265,22 +281,22 @@ TEST(VolumeSphere, RigidMotionInvariance)
     const Rotation rotate(normalized(Vec3(1, 2, 3)), 0.7);
     for (auto& p : moved.points) p = rotate(p) + Vec3(12.34, -5.6, 7.89);
     for (const double precision : {6.0, 7.0}) {
-        ComputeOptions o;
+        InvariantsOptions o;
         o.radius = 1.5;
         o.minVoxelsPerRadius = precision;
-        const ComputeResult r1 = computeInvariants(mesh, o);
-        o.voxelSize = r1.voxelSize;
-        const ComputeResult r2 = computeInvariants(moved, o);
+        const InvariantsResult r1 = computeInvariants(mesh, o);
+        o.voxelSize = r1.plan.voxelSize;
+        const InvariantsResult r2 = computeInvariants(moved, o);
         double maxV = 0, maxS = 0, sumV = 0, sumS = 0;
         std::size_t compared = 0;
-        for (std::size_t j = 0; j < r1.invariants.radii.size(); ++j) {
-            if (r1.invariants.radii[j] < 3 * r1.stats.medianEdge) continue;
+        for (std::size_t j = 0; j < r1.plan.radii.size(); ++j) {
+            if (r1.plan.radii[j] < 3 * r1.stats.medianEdge) continue;
             for (std::size_t i = 0; i < mesh.numVertices(); ++i) {
-                const float v1 = r1.invariants.volume[j][i], v2 = r2.invariants.volume[j][i];
+                const float v1 = r1.features[Invariant::Volume][j][i], v2 = r2.features[Invariant::Volume][j][i];
                 ASSERT_EQ(std::isnan(v1), std::isnan(v2)) << "vertex " << i << " radius " << j;
                 if (std::isnan(v1)) continue;
                 const double dv = std::abs(v1 - v2);
-                const double ds = std::abs(r1.invariants.sphere[j][i] - r2.invariants.sphere[j][i]);
+                const double ds = std::abs(r1.features[Invariant::Sphere][j][i] - r2.features[Invariant::Sphere][j][i]);
                 maxV = std::max(maxV, dv);
                 maxS = std::max(maxS, ds);
                 sumV += dv;
@@ -303,27 +319,27 @@ TEST(VolumeSphere, OpenPatchAgreesWithClosedSlab)
 {
     TriMesh open = samples::makeHeightField(smallTablet(false));
     TriMesh slab = samples::makeHeightField(smallTablet(true));
-    ComputeOptions o;
+    InvariantsOptions o;
     o.radius = 1.5;
-    const ComputeResult ro = computeInvariants(open, o);
-    o.voxelSize = ro.voxelSize;
-    const ComputeResult rc = computeInvariants(slab, o);
+    const InvariantsResult ro = computeInvariants(open, o);
+    o.voxelSize = ro.plan.voxelSize;
+    const InvariantsResult rc = computeInvariants(slab, o);
     std::size_t compared = 0, flagged = 0;
     double maxV = 0, maxS = 0;
     for (std::size_t i = 0; i < open.numVertices(); ++i) {
         const Vec3& p = open.points[i];
         const double toBorder = std::min({p.x, 10 - p.x, p.y, 8 - p.y});
-        for (std::size_t j = 0; j < ro.invariants.radii.size(); ++j) {
-            const float v = ro.invariants.volume[j][i];
-            if (toBorder < ro.invariants.radii[j]) {
+        for (std::size_t j = 0; j < ro.plan.radii.size(); ++j) {
+            const float v = ro.features[Invariant::Volume][j][i];
+            if (toBorder < ro.plan.radii[j]) {
                 // The ball reaches the border: must be flagged.
                 EXPECT_TRUE(std::isnan(v)) << "vertex " << i << " radius " << j;
                 ++flagged;
                 continue;
             }
-            if (std::isnan(v) || ro.invariants.radii[j] < 3 * ro.stats.medianEdge) continue;
-            maxV = std::max(maxV, double(std::abs(v - rc.invariants.volume[j][i])));
-            maxS = std::max(maxS, double(std::abs(ro.invariants.sphere[j][i] - rc.invariants.sphere[j][i])));
+            if (std::isnan(v) || ro.plan.radii[j] < 3 * ro.stats.medianEdge) continue;
+            maxV = std::max(maxV, double(std::abs(v - rc.features[Invariant::Volume][j][i])));
+            maxS = std::max(maxS, double(std::abs(ro.features[Invariant::Sphere][j][i] - rc.features[Invariant::Sphere][j][i])));
             ++compared;
         }
     }
@@ -334,15 +350,15 @@ TEST(VolumeSphere, OpenPatchAgreesWithClosedSlab)
     EXPECT_LE(maxV, 2e-3);
     EXPECT_LE(maxS, 2e-3);
     // The slab has no border: nothing masked.
-    EXPECT_EQ(rc.invariants.numMaskedValues, 0u);
+    EXPECT_EQ(rc.cost.maskedValues, 0u);
 }
 
 TEST(VolumeSphere, SameResultsForOneAndTwoThreads)
 {
     TriMesh mesh = samples::makeHeightField(smallTablet(false));
-    ComputeOptions o;
+    InvariantsOptions o;
     o.radius = 1.0;
-    ComputeResult r1, r2;
+    InvariantsResult r1, r2;
     {
         tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
         TriMesh m = mesh;
@@ -353,11 +369,11 @@ TEST(VolumeSphere, SameResultsForOneAndTwoThreads)
         TriMesh m = mesh;
         r2 = computeInvariants(m, o);
     }
-    for (std::size_t j = 0; j < r1.invariants.radii.size(); ++j)
+    for (std::size_t j = 0; j < r1.plan.radii.size(); ++j)
         for (std::size_t i = 0; i < mesh.numVertices(); ++i) {
-            const float a = r1.invariants.volume[j][i], b = r2.invariants.volume[j][i];
+            const float a = r1.features[Invariant::Volume][j][i], b = r2.features[Invariant::Volume][j][i];
             ASSERT_TRUE((std::isnan(a) && std::isnan(b)) || a == b) << j << " " << i;
-            const float c = r1.invariants.sphere[j][i], d = r2.invariants.sphere[j][i];
+            const float c = r1.features[Invariant::Sphere][j][i], d = r2.features[Invariant::Sphere][j][i];
             ASSERT_TRUE((std::isnan(c) && std::isnan(d)) || c == d) << j << " " << i;
         }
 }

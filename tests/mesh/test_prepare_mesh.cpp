@@ -34,22 +34,22 @@ struct Values {
     double medianEdge = 0;
 };
 
-Values computeOn(const PrepareMeshResult& prepared, const ComputeOptions& options)
+Values computeOn(const PrepareMeshResult& prepared, const InvariantsOptions& options)
 {
-    const ComputeResult r = computeInvariants(prepared.mesh, options);
+    const InvariantsResult r = computeInvariants(prepared.mesh, options);
     Values v;
-    const std::vector<std::vector<float>>* from[4] = {&r.invariants.volume, &r.invariants.sphere, &r.patchLine.patch,
-                                                      &r.patchLine.line};
+    const std::vector<std::vector<float>>* from[4] = {&r.features[Invariant::Volume], &r.features[Invariant::Sphere], &r.features[Invariant::Patch],
+                                                      &r.features[Invariant::Line]};
     for (int q = 0; q < 4; ++q)
         for (const auto& column : *from[q]) v.columns[q].push_back(toInputVertices(prepared, column));
-    v.radii = r.invariants.radii;
+    v.radii = r.plan.radii;
     v.medianEdge = r.stats.medianEdge;
     return v;
 }
 
-ComputeOptions smallOptions(double radius, double voxel)
+InvariantsOptions smallOptions(double radius, double voxel)
 {
-    ComputeOptions o;
+    InvariantsOptions o;
     o.radius = radius;
     o.scales = 4;
     o.voxelSize = voxel;  // fixed, so that a changed median edge does not move the grid
@@ -115,7 +115,7 @@ std::vector<std::uint32_t> identity(std::size_t n)
 
 bool hasChange(const PrepareMeshResult& r, const std::string& kind, std::size_t count)
 {
-    for (const PrepareChange& c : r.changes)
+    for (const Diagnostic& c : r.changes)
         if (c.kind == kind) return c.count == count;
     return false;
 }
@@ -158,11 +158,11 @@ protected:
     }
     static TriMesh* clean;
     static Values* want;
-    static ComputeOptions options;
+    static InvariantsOptions options;
 };
 TriMesh* RepairKinds::clean = nullptr;
 Values* RepairKinds::want = nullptr;
-ComputeOptions RepairKinds::options;
+InvariantsOptions RepairKinds::options;
 
 } // namespace
 
@@ -371,7 +371,7 @@ std::vector<std::uint32_t> punchPinHoles(TriMesh& mesh, std::size_t count, doubl
 void checkPinHoles(const TriMesh& intact, const char* title)
 {
     const MeshStats stats = computeMeshStats(intact);
-    ComputeOptions o;
+    InvariantsOptions o;
     o.radius = 30 * stats.medianEdge;
     o.scales = 16;
     PrepareMeshOptions po;
@@ -379,8 +379,8 @@ void checkPinHoles(const TriMesh& intact, const char* title)
     po.radius = o.radius;
     const PrepareMeshResult whole = prepareMesh(intact, po);
     ASSERT_TRUE(whole.changes.empty());
-    const ComputeResult plan = prepareComputation(whole.mesh, o);
-    o.voxelSize = plan.voxelSize;  // the intact mesh's grid for both
+    const InvariantsResult plan = prepareComputation(whole.mesh, o);
+    o.voxelSize = plan.plan.voxelSize;  // the intact mesh's grid for both
     const Values want = computeOn(whole, o);
 
     TriMesh holed = intact;
@@ -460,7 +460,7 @@ TEST(PrepareMesh, OpenTabletKeepsItsOuterBorderMasked)
     ho.height = 8;
     ho.spacing = 0.1;
     const TriMesh open = samples::makeHeightField(ho);
-    ComputeOptions o;
+    InvariantsOptions o;
     o.radius = 1.0;
     o.scales = 4;
     PrepareMeshOptions po;
@@ -471,11 +471,11 @@ TEST(PrepareMesh, OpenTabletKeepsItsOuterBorderMasked)
     EXPECT_EQ(prepared.holes.numTooLarge, 1u);
     EXPECT_EQ(prepared.mesh.triangles, open.triangles);
     // The same values and the same mask as the mesh computed as it is.
-    const ComputeResult direct = computeInvariants(open, o);
+    const InvariantsResult direct = computeInvariants(open, o);
     const Values got = computeOn(prepared, o);
     std::size_t masked = 0, compared = 0;
     for (std::size_t i = 0; i < open.numVertices(); ++i) {
-        const float a = direct.invariants.volume.back()[i], b = got.columns[0].back()[i];
+        const float a = direct.features[Invariant::Volume].back()[i], b = got.columns[0].back()[i];
         masked += std::isnan(a);
         EXPECT_EQ(std::isnan(a), std::isnan(b)) << i;
         if (!std::isnan(a)) {

@@ -500,7 +500,7 @@ TEST(RingSmoothing, ZeroIterationsLeaveValuesUnchanged)
     const std::vector<float> values = noisyField(mesh, 0.3);
     for (auto filter : {SmoothingFilter::Mean, SmoothingFilter::Median}) {
         std::vector<float> result = values;
-        Progress progress(false);
+        RunContext progress;
         smoothField(mesh, result, makeOptions(filter, 0), &progress);
         EXPECT_EQ(result, values);
     }

@@ -24,16 +24,16 @@ namespace {
 
 /// Largest |tiled − untiled| over all features; NaN must match NaN. @p compared counts the
 /// pairs of numbers compared (NaN/NaN pairs are not), so that a check of nothing shows.
-double maxDifference(const ComputeResult& a, const ComputeResult& b, std::size_t& nanMismatches,
+double maxDifference(const InvariantsResult& a, const InvariantsResult& b, std::size_t& nanMismatches,
                      std::size_t* compared = nullptr)
 {
     double worst = 0;
     nanMismatches = 0;
     if (compared) *compared = 0;
-    const std::vector<std::vector<float>>* as[4] = {&a.invariants.volume, &a.invariants.sphere, &a.patchLine.patch,
-                                                    &a.patchLine.line};
-    const std::vector<std::vector<float>>* bs[4] = {&b.invariants.volume, &b.invariants.sphere, &b.patchLine.patch,
-                                                    &b.patchLine.line};
+    const std::vector<std::vector<float>>* as[4] = {&a.features[Invariant::Volume], &a.features[Invariant::Sphere], &a.features[Invariant::Patch],
+                                                    &a.features[Invariant::Line]};
+    const std::vector<std::vector<float>>* bs[4] = {&b.features[Invariant::Volume], &b.features[Invariant::Sphere], &b.features[Invariant::Patch],
+                                                    &b.features[Invariant::Line]};
     for (int q = 0; q < 4; ++q) {
         EXPECT_EQ(as[q]->size(), bs[q]->size());
         for (std::size_t j = 0; j < as[q]->size() && j < bs[q]->size(); ++j)
@@ -51,16 +51,16 @@ double maxDifference(const ComputeResult& a, const ComputeResult& b, std::size_t
 
 /// The same mesh computed whole and in n × n tiles, and how far they differ.
 struct TiledAgainstWhole {
-    ComputeResult tiled;
+    InvariantsResult tiled;
     TiledComputeInfo info;
     double diff = 0;
     std::size_t nanMismatches = 0, compared = 0;
 };
 
-TiledAgainstWhole tiledAgainstWhole(const TriMesh& mesh, const ComputeOptions& co, int n)
+TiledAgainstWhole tiledAgainstWhole(const TriMesh& mesh, const InvariantsOptions& co, int n)
 {
     TriMesh whole = mesh, copy = mesh;
-    const ComputeResult untiled = computeInvariants(whole, co);
+    const InvariantsResult untiled = computeInvariants(whole, co);
     TilingOptions to;
     to.tilesPerAxis = n;
     TiledAgainstWhole t;
@@ -125,7 +125,7 @@ TEST(TiledCompute, SlabWithLongWallTrianglesEqualsUntiled)
     std::printf("slab with long walls: %zu vertices, median edge %.3f, longest %.2f\n", mesh.numVertices(),
                 stats.medianEdge, stats.maxEdge);
     ASSERT_GT(stats.maxEdge, 30 * stats.medianEdge);
-    ComputeOptions co;
+    InvariantsOptions co;
     co.radius = 0.5;
     for (int n : {2, 3, 4}) {
         const TiledAgainstWhole t = tiledAgainstWhole(mesh, co, n);
@@ -136,16 +136,16 @@ TEST(TiledCompute, SlabWithLongWallTrianglesEqualsUntiled)
 TEST(TiledCompute, OpenTabletEqualsUntiled)
 {
     TriMesh mesh = tablet();
-    ComputeOptions co;
+    InvariantsOptions co;
     co.radius = 1.0;
     TriMesh whole = mesh;
-    const ComputeResult untiled = computeInvariants(whole, co);
+    const InvariantsResult untiled = computeInvariants(whole, co);
     for (int n : {2, 3}) {
         TilingOptions to;
         to.tilesPerAxis = n;
         TiledComputeInfo info;
         TriMesh copy = mesh;
-        const ComputeResult tiled = computeTiled(copy, co, to, &info);
+        const InvariantsResult tiled = computeTiled(copy, co, to, &info);
         std::size_t nanMismatches = 0, compared = 0;
         const double diff = maxDifference(untiled, tiled, nanMismatches, &compared);
         std::printf("tablet %zu vertices, %d x %d tiles (%zu computed, largest %zu vertices, halo %.2f): "
@@ -158,7 +158,7 @@ TEST(TiledCompute, OpenTabletEqualsUntiled)
         EXPECT_GT(compared, 0u);
         EXPECT_EQ(diff, 0.0);
         EXPECT_EQ(nanMismatches, 0u);
-        EXPECT_DOUBLE_EQ(tiled.voxelSize, untiled.voxelSize);
+        EXPECT_DOUBLE_EQ(tiled.plan.voxelSize, untiled.plan.voxelSize);
     }
 }
 
@@ -168,7 +168,7 @@ TEST(TiledCompute, OpenTabletEqualsUntiled)
 TEST(TiledCompute, DenseTabletEqualsUntiledBitForBit)
 {
     const TriMesh mesh = tablet(7, 6, 0.03, 4);
-    ComputeOptions co;
+    InvariantsOptions co;
     co.radius = 1.0;
     const TiledAgainstWhole t = tiledAgainstWhole(mesh, co, 2);
     expectBitIdentical(t, "dense tablet " + std::to_string(mesh.numVertices()) + " vertices, 2 x 2 tiles (halo " +
@@ -184,7 +184,7 @@ TEST(TiledCompute, DenseTabletEqualsUntiledBitForBit)
 TEST(TiledCompute, VerticesOnVoxelPlanesEqualUntiledBitForBit)
 {
     TriMesh mesh = tablet();
-    ComputeOptions co;
+    InvariantsOptions co;
     co.radius = 1.0;
     co.voxelSize = 1.0 / 48.0;
     co.computePatch = co.computeLine = false;  // the tie is in V and S's cell choice
@@ -202,12 +202,12 @@ TEST(TiledCompute, ClosedSphereEqualsUntiled)
     so.radius = 4;
     so.spacing = 0.15;
     const TriMesh mesh = samples::makeSphere(so);
-    ComputeOptions co;
+    InvariantsOptions co;
     co.radius = 1.0;
     const TiledAgainstWhole t = tiledAgainstWhole(mesh, co, 2);
     expectBitIdentical(t, "sphere " + std::to_string(mesh.numVertices()) + " vertices, 2 x 2 tiles");
     // A closed mesh: nothing is masked, tiled or not.
-    EXPECT_EQ(t.tiled.invariants.numMaskedValues, 0u);
+    EXPECT_EQ(t.tiled.cost.maskedValues, 0u);
 }
 
 // The one entry point: computeInvariants with tilesPerAxis or a memory budget in its
@@ -215,21 +215,21 @@ TEST(TiledCompute, ClosedSphereEqualsUntiled)
 TEST(TiledCompute, FrontDoorTilesEqualOnePiece)
 {
     const TriMesh mesh = tablet(10, 8, 0.12);
-    ComputeOptions co;
+    InvariantsOptions co;
     co.radius = 1.0;
     co.scales = 8;
-    const ComputeResult whole = computeInvariants(mesh, co);
+    const InvariantsResult whole = computeInvariants(mesh, co);
     for (const bool byBudget : {false, true}) {
-        ComputeOptions tiled = co;
+        InvariantsOptions tiled = co;
         if (byBudget) tiled.memoryBudget = 1e9;  // room for one tile: the budget route
         else tiled.tilesPerAxis = 3;
-        const ComputeResult parts = computeInvariants(mesh, tiled);
+        const InvariantsResult parts = computeInvariants(mesh, tiled);
         TiledAgainstWhole t;
         t.tiled = parts;
         t.diff = maxDifference(whole, parts, t.nanMismatches, &t.compared);
         expectBitIdentical(t, byBudget ? "front door, memory budget 1 GB" : "front door, 3 x 3 tiles");
     }
-    ComputeOptions exact = co;
+    InvariantsOptions exact = co;
     exact.exact = true;
     exact.tilesPerAxis = 2;
     EXPECT_THROW(computeInvariants(mesh, exact), InvalidInputError);
@@ -238,17 +238,17 @@ TEST(TiledCompute, FrontDoorTilesEqualOnePiece)
 TEST(TiledCompute, TilesFromMemoryBudget)
 {
     TriMesh mesh = tablet();
-    ComputeOptions co;
+    InvariantsOptions co;
     co.radius = 1.0;
     co.computePatch = co.computeLine = false;  // quicker; V and S carry the tiling logic too
     TriMesh whole = mesh;
-    const ComputeResult untiled = computeInvariants(whole, co);
+    const InvariantsResult untiled = computeInvariants(whole, co);
     const double budget = 0.5 * kBytesPerTileVertex * double(mesh.numVertices());
     TilingOptions to;
     to.memoryBudget = budget;
     TiledComputeInfo info;
     TriMesh copy = mesh;
-    const ComputeResult tiled = computeTiled(copy, co, to, &info);
+    const InvariantsResult tiled = computeTiled(copy, co, to, &info);
     EXPECT_GE(info.tilesPerAxis, 2);
     EXPECT_LE(info.estimatedPeakBytes, budget);
     std::size_t nanMismatches = 0, compared = 0;
@@ -260,7 +260,7 @@ TEST(TiledCompute, TilesFromMemoryBudget)
 TEST(TiledCompute, BudgetTooSmallForOneTile)
 {
     TriMesh mesh = tablet();
-    ComputeOptions co;
+    InvariantsOptions co;
     co.radius = 1.0;
     TilingOptions to;
     to.memoryBudget = 1e5;  // less than the mesh itself
@@ -294,11 +294,11 @@ TEST(TiledCompute, BudgetTooSmallForOneTile)
 TEST(TiledCompute, TilesHandedToASinkCoverEveryVertexOnce)
 {
     TriMesh mesh = tablet();
-    ComputeOptions co;
+    InvariantsOptions co;
     co.radius = 1.0;
     co.computePatch = false;  // quicker; L still exercises the P/L columns
     TriMesh whole = mesh;
-    const ComputeResult untiled = computeInvariants(whole, co);
+    const InvariantsResult untiled = computeInvariants(whole, co);
     TilingOptions to;
     to.tilesPerAxis = 3;
     const std::vector<int> owner = tileOfVertices(mesh, 3);
@@ -306,9 +306,9 @@ TEST(TiledCompute, TilesHandedToASinkCoverEveryVertexOnce)
     std::size_t parts = 0, mismatches = 0, outOfOrder = 0, wrongTile = 0;
     const auto sink = [&](const TileResult& part) {
         ++parts;
-        ASSERT_EQ(part.values.invariants.volume.size(), untiled.invariants.volume.size());
-        ASSERT_EQ(part.values.patchLine.line.size(), untiled.patchLine.line.size());
-        EXPECT_TRUE(part.values.patchLine.patch.empty());
+        ASSERT_EQ(part.values.features[Invariant::Volume].size(), untiled.features[Invariant::Volume].size());
+        ASSERT_EQ(part.values.features[Invariant::Line].size(), untiled.features[Invariant::Line].size());
+        EXPECT_TRUE(part.values.features[Invariant::Patch].empty());
         for (std::size_t l = 0; l < part.vertices.size(); ++l) {
             const std::uint32_t v = part.vertices[l];
             ++seen[v];
@@ -320,20 +320,20 @@ TEST(TiledCompute, TilesHandedToASinkCoverEveryVertexOnce)
                     if (std::isnan(a) != std::isnan(b) || (!std::isnan(a) && a != b)) ++mismatches;
                 }
             };
-            check(part.values.invariants.volume, untiled.invariants.volume);
-            check(part.values.invariants.sphere, untiled.invariants.sphere);
-            check(part.values.patchLine.line, untiled.patchLine.line);
+            check(part.values.features[Invariant::Volume], untiled.features[Invariant::Volume]);
+            check(part.values.features[Invariant::Sphere], untiled.features[Invariant::Sphere]);
+            check(part.values.features[Invariant::Line], untiled.features[Invariant::Line]);
         }
     };
     TriMesh copy = mesh;
-    const ComputeResult tiled = computeTiles(copy, co, to, sink);
+    const InvariantsResult tiled = computeTiles(copy, co, to, sink);
     EXPECT_EQ(parts, 9u);
     EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), std::ptrdiff_t(mesh.numVertices()));
     EXPECT_EQ(outOfOrder, 0u);
     EXPECT_EQ(wrongTile, 0u);
     EXPECT_EQ(mismatches, 0u);  // bit-identical
-    EXPECT_TRUE(tiled.invariants.volume.empty());
-    EXPECT_EQ(tiled.invariants.numMaskedValues, untiled.invariants.numMaskedValues);
+    EXPECT_TRUE(tiled.features[Invariant::Volume].empty());
+    EXPECT_EQ(tiled.cost.maskedValues, untiled.cost.maskedValues);
 
     to.onlyTile = 4;
     parts = 0;

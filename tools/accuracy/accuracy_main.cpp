@@ -66,7 +66,7 @@ struct Row {
     std::vector<Worst> worst;  // the largest differences, largest first
 };
 
-Row measure(const Case& c, const ComputeOptions& settings, std::size_t numVertices, std::uint64_t seed,
+Row measure(const Case& c, const InvariantsOptions& settings, std::size_t numVertices, std::uint64_t seed,
             std::size_t keepWorst)
 {
     Row row;
@@ -76,11 +76,11 @@ Row measure(const Case& c, const ComputeOptions& settings, std::size_t numVertic
     po.radius = c.radius;
     const TriMesh mesh = prepareMesh(c.mesh, po).mesh;
     row.vertices = mesh.numVertices();
-    ComputeOptions o = settings;
+    InvariantsOptions o = settings;
     o.radius = c.radius;
     const int scales = o.scales;
     const Stopwatch fastTime;
-    const ComputeResult fast = computeInvariants(mesh, o);
+    const InvariantsResult fast = computeInvariants(mesh, o);
     row.fastSeconds = fastTime.seconds();
     const double edge = fast.stats.medianEdge;
     row.edgesPerRadius = c.radius / edge;
@@ -93,15 +93,15 @@ Row measure(const Case& c, const ComputeOptions& settings, std::size_t numVertic
         if (!taken[v]) taken[v] = 1, chosen.push_back(v);
     }
     std::sort(chosen.begin(), chosen.end());
-    ComputeOptions eo = o;
+    InvariantsOptions eo = o;
     eo.exact = true;
     eo.exactVertices = chosen;
-    const ComputeResult exact = computeInvariants(mesh, eo);
+    const InvariantsResult exact = computeInvariants(mesh, eo);
 
     const std::vector<double> radii = equidistantRadii(c.radius, scales);
-    const std::vector<std::vector<float>>* columns[4][2] = {
-        {&fast.invariants.volume, &exact.invariants.volume}, {&fast.invariants.sphere, &exact.invariants.sphere},
-        {&fast.patchLine.patch, &exact.patchLine.patch}, {&fast.patchLine.line, &exact.patchLine.line}};
+    const FeatureColumns* columns[4][2];
+    for (Invariant i : kAllInvariants)
+        columns[std::size_t(i)][0] = &fast.features[i], columns[std::size_t(i)][1] = &exact.features[i];
     for (std::size_t j = 0; j < radii.size(); ++j) {
         if (radii[j] < 3 * edge) continue;
         for (int i = 0; i < 4; ++i)
@@ -176,7 +176,7 @@ int main(int argc, char** argv)
     std::size_t vertices = 200;
     std::uint64_t seed = 1;
     std::size_t worst = 0;
-    ComputeOptions settings;
+    InvariantsOptions settings;
     app.add_option("--precision", settings.minVoxelsPerRadius, "as msii compute --precision (default 6)");
     app.add_option("--pl-precision", settings.patchLinePrecision, "as msii compute --pl-precision (default: 4/3 of --precision)");
     app.add_option("--worst", worst, "also list the K largest differences (vertex of the prepared mesh, radius index)");

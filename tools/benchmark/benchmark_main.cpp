@@ -277,7 +277,7 @@ int main(int argc, char** argv)
     std::size_t holesFilled = 0;
     std::size_t tiledLargest = 0, tiledDiffering = 0;
     const auto has = [&](char c) { return invariants.find(c) != std::string::npos; };
-    ComputeResult last;
+    InvariantsResult last;
     TriMesh lastMesh;
     std::size_t nv = 0;
     for (int run = 0; run < runs; ++run) {
@@ -285,7 +285,7 @@ int main(int argc, char** argv)
         TriMesh mesh = readMesh(input).mesh;
         read.push_back(wall.seconds());
         nv = mesh.numVertices();
-        ComputeOptions o;
+        InvariantsOptions o;
         o.radius = radius;
         o.scales = scales;
         o.minVoxelsPerRadius = precision;
@@ -305,23 +305,23 @@ int main(int argc, char** argv)
         prepare.push_back(preparing.seconds());
         last = computeInvariants(prepared.mesh, o);
         const Stopwatch writing;
-        writePly(output, mesh, featureProperties(featuresOf(last.invariants, last.patchLine)));
+        writePly(output, mesh, featureProperties(last.features));
         write.push_back(writing.seconds());
         total.push_back(wall.seconds());
-        check.push_back(last.timings.check);
-        ls.push_back(last.timings.levelSet);
-        occ.push_back(last.timings.occupancy);
-        st.push_back(last.timings.stencils);
-        interp.push_back(last.timings.interpolation);
-        samp.push_back(last.timings.samples);
-        pl.push_back(last.timings.patchLine);
-        compute.push_back(last.timings.total);
+        check.push_back(last.cost.check);
+        ls.push_back(last.cost.levelSet);
+        occ.push_back(last.cost.occupancy);
+        st.push_back(last.cost.stencils);
+        interp.push_back(last.cost.interpolation);
+        samp.push_back(last.cost.samples);
+        pl.push_back(last.cost.patchLine);
+        compute.push_back(last.cost.total);
         if (tiles > 0) {
             TilingOptions to;
             to.tilesPerAxis = tiles;
             TiledComputeInfo info;
             const Stopwatch tiledWall;
-            const ComputeResult t = computeTiled(mesh, o, to, &info);
+            const InvariantsResult t = computeTiled(mesh, o, to, &info);
             tiled.push_back(tiledWall.seconds());
             tiledLargest = info.largestTileVertices;
             // Checked, not assumed: every value against the untiled run, bit for bit.
@@ -332,10 +332,8 @@ int main(int argc, char** argv)
                         count += std::memcmp(&a[j][i], &b[j][i], sizeof(float)) != 0;
                 return count;
             };
-            tiledDiffering = differing(t.invariants.volume, last.invariants.volume) +
-                             differing(t.invariants.sphere, last.invariants.sphere) +
-                             differing(t.patchLine.patch, last.patchLine.patch) +
-                             differing(t.patchLine.line, last.patchLine.line);
+            tiledDiffering = 0;
+            for (Invariant i : kAllInvariants) tiledDiffering += differing(t.features[i], last.features[i]);
         }
         {
             TriMesh holed = mesh;
@@ -435,7 +433,7 @@ int main(int argc, char** argv)
 
     // After compute: every metric over all computed features (4 × N with V,S,P,L) against a
     // vertex's vector, and 30 passes of each 1-ring filter on quality.
-    const std::vector<VertexProperty> props = featureProperties(featuresOf(last.invariants, last.patchLine));
+    const std::vector<VertexProperty> props = featureProperties(last.features);
     std::vector<Invariant> all;
     for (const auto& [c, inv] : {std::pair{'V', Invariant::Volume}, std::pair{'S', Invariant::Sphere},
                                  std::pair{'P', Invariant::Patch}, std::pair{'L', Invariant::Line}})
@@ -550,13 +548,13 @@ int main(int argc, char** argv)
                 "%s, precision %g (P, L: %g), voxel %.4f mm, %d levels, %d runs (medians)\n",
                 size, size, spacing, nv, radius, scales, invariants.c_str(), precision,
                 [&] {
-                    ComputeOptions o;
+                    InvariantsOptions o;
                     o.minVoxelsPerRadius = precision;
                     o.patchLinePrecision = plPrecision;
                     return patchLinePrecision(o);
                 }(),
-                last.voxelSize,
-                last.invariants.numLevels, runs);
+                last.plan.voxelSize,
+                last.plan.numVolumeSphereLevels(), runs);
     report.print("machine: %s, %u hardware threads\n\n", cpuModel().c_str(), std::thread::hardware_concurrency());
     report.print("| %-62s | %8s |\n|%s|%s|\n", "stage", "seconds", std::string(64, '-').c_str(), std::string(10, '-').c_str());
     const auto row = [&report](const char* name, double value, const char* format) {

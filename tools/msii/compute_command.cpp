@@ -2,8 +2,9 @@
 /// vertex (or the chosen ones), fast or exact; optionally GigaMesh-compatible files too.
 #include "commands.h"
 
+#include <msii/core/terminal_progress.h>
 #include <msii/core/errors.h>
-#include <msii/core/progress.h>
+#include <msii/core/run_context.h>
 #include <msii/core/stopwatch.h>
 #include <msii/core/version.h>
 #include <msii/invariants/compute.h>
@@ -68,7 +69,7 @@ struct ComputeArgs {
 /// The P and L precision the engine uses for these arguments (0 = its automatic choice).
 double plPrecisionOf(const ComputeArgs& args)
 {
-    ComputeOptions o;
+    InvariantsOptions o;
     o.minVoxelsPerRadius = args.precision;
     o.patchLinePrecision = args.plPrecision;
     return patchLinePrecision(o);
@@ -207,6 +208,16 @@ std::string radiusHint(const std::string& input)
 }
 
 /// "8G", "500M", "8GB", "2.5e9" (bytes) to bytes; empty = 0 (no limit).
+/// A diagnostic as `msii compute` prints it: the engine's sentence, plus the option that
+/// changes what it is about.
+std::string worded(const Diagnostic& d)
+{
+    if (d.kind == "mostly_masked") return d.message + " (--radius; --fill-holes fills larger holes)";
+    if (d.kind == "smallest_radius_below_edge") return d.message + " (raise --radius or lower --scales)";
+    if (d.kind == "holes_filled") return d.message + " (--fill-holes sets the largest hole filled; 0 fills none)";
+    return d.message;
+}
+
 double parseBytes(const std::string& text)
 {
     if (text.empty()) return 0;
@@ -243,7 +254,8 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
         checkWritable(path);
     }
 
-    Progress progress(!args.quiet && Progress::stderrIsTerminal());
+    TerminalProgress terminal(!args.quiet && stderrIsTerminal());
+    RunContext progress(terminal.listener());
     ReadMeshResult read = readMesh(input);
     const double readSeconds = total.seconds();
     const std::size_t inputFaces = read.mesh.numTriangles();
@@ -266,11 +278,11 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     }
     const double prepareSeconds = prepareWatch.seconds();
     if (!args.quiet)
-        for (const PrepareChange& c : prepared.changes)
+        for (const Diagnostic& c : prepared.changes)
             std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), c.message.c_str());
     const std::vector<float>& filledShare = prepared.filledShare;  // radius given: one per vertex
 
-    ComputeOptions options;
+    InvariantsOptions options;
     options.radius = args.radius;
     options.scales = args.scales;
     options.voxelSize = args.voxelSize;
@@ -296,7 +308,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     } else if (!args.vertices.empty() || args.randomVertices > 0) {
         throw InvalidInputError("--vertices and --random-vertices go with --exact");
     }
-    ComputeResult result;
+    InvariantsResult result;
     TiledComputeInfo tiledInfo;
     const bool tiled = !args.exact && (!args.memoryBudget.empty() || args.tiles > 0);
     if (args.tile >= 0 && args.tiles <= 0) throw InvalidInputError("--tile I goes with --tiles K (tiles 0 to K*K-1)");
@@ -304,12 +316,12 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
 
     // The PLY's header comments, from a result (the whole one or a tile's: same plan).
     std::string qualityName;  // e.g. "V_16"
-    const auto plyOptionsFor = [&](const ComputeResult& r) {
-        qualityName = qualitySource(featuresOf(r.invariants, r.patchLine));
+    const auto plyOptionsFor = [&](const InvariantsResult& r) {
+        qualityName = qualitySource(r.features);
         WritePlyOptions plyOptions;
         std::ostringstream comment;
         comment << "msii " << versionString() << " compute" << (args.exact ? " --exact" : "")
-                << " R=" << args.radius << " N=" << r.invariants.radii.size() << " voxel=" << r.voxelSize
+                << " R=" << args.radius << " N=" << r.plan.radii.size() << " voxel=" << r.plan.voxelSize
                 << "; V_jj = V/|B_r|, S_jj = S/(4 pi r^2) (plane 0.5), P_jj = P/(pi r^2), L_jj = "
                    "L/(2 pi r) (plane 1), r_j = j*R/N; NaN = ball reaches the border"
                 << (args.exact ? " or vertex not computed" : "") << "; quality = " << qualityName.substr(0, 1)
@@ -340,8 +352,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                 const InputVertexLists inputsOf = inputVerticesOf(prepared);
                 const auto sink = [&](const TileResult& part) {
                     const Stopwatch write;
-                    std::vector<VertexProperty> props =
-                        featureProperties(featuresOf(part.values.invariants, part.values.patchLine));
+                    std::vector<VertexProperty> props = featureProperties(part.values.features);
                     std::vector<std::uint32_t> vertices;
                     std::vector<std::uint32_t> rows;  // row of part.vertices for each input vertex
                     for (std::size_t l = 0; l < part.vertices.size(); ++l)
@@ -362,7 +373,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                     if (!pieces) {
                         // Vertices in no tile (in no face) get NaN features, quality's stand-in
                         // and valid_radii 0, as in writePly's output.
-                        const float standIn = qualityStandIn(featuresOf(part.values.invariants, part.values.patchLine));
+                        const float standIn = qualityStandIn(part.values.features);
                         std::vector<PlyColumn> names;
                         for (const VertexProperty& p : props)
                             names.push_back({p.name, p.integer,
@@ -382,20 +393,19 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
             result = computeInvariants(prepared.mesh, options, &progress);
         }
         if (!streamed) {
-            for (auto* columns : {&result.invariants.volume, &result.invariants.sphere, &result.patchLine.patch,
-                                  &result.patchLine.line})
-                for (std::vector<float>& column : *columns) column = toInputVertices(prepared, column);
+            for (FeatureColumns& columns : result.features.columns)
+                for (std::vector<float>& column : columns) column = toInputVertices(prepared, column);
         }
     } catch (const InvalidInputError& e) {
         throw InvalidInputError(fs::path(input).filename().string() + ": " + e.what());
     }
     if (!args.quiet)
-        for (const auto& w : result.warnings)
-            std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), w.c_str());
+        for (const Diagnostic& d : result.diagnostics)
+            std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), worded(d).c_str());
 
-    const auto& inv = result.invariants;
-    const auto& pl = result.patchLine;
-    const std::size_t n = inv.radii.size();
+    const FeatureSet& features = result.features;
+    const ScalePlan& plan = result.plan;
+    const std::size_t n = plan.radii.size();
     std::string letters;
     for (const auto& [on, c] : {std::pair{sel.volume, 'V'}, std::pair{sel.sphere, 'S'},
                                 std::pair{sel.patch, 'P'}, std::pair{sel.line, 'L'}})
@@ -405,7 +415,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     if (streamed) {
         pieces->commit();
     } else {
-        std::vector<VertexProperty> props = featureProperties(featuresOf(inv, pl));
+        std::vector<VertexProperty> props = featureProperties(features);
         props.push_back({"filled_share", toInputVertices(prepared, filledShare)});
         writePly(output, read.mesh, props, plyOptionsFor(result));
     }
@@ -413,19 +423,19 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
         GigaMeshMatInfo info;
         info.inputFile = fs::absolute(input).string();
         info.largestRadius = args.radius;
-        info.radii = inv.radii;
-        info.notes = {"msii voxel size " + std::to_string(result.voxelSize) + ", precision " +
+        info.radii = plan.radii;
+        info.notes = {"msii voxel size " + std::to_string(plan.voxelSize) + ", precision " +
                       std::to_string(args.precision) + (args.exact ? ", exact mode" : "")};
         std::size_t k = 0;
         GigaMeshRows plyRows;
         if (sel.volume) {
             info.invariant = GigaMeshInvariant::Volume;
-            plyRows = toGigaMeshRows(inv.volume, GigaMeshInvariant::Volume);
+            plyRows = toGigaMeshRows(features[Invariant::Volume], GigaMeshInvariant::Volume);
             writeGigaMeshMat(gigameshFiles[k++], gigaMeshMatHeader(info), plyRows);
         }
         if (sel.patch) {
             info.invariant = GigaMeshInvariant::Patch;
-            const GigaMeshRows rows = toGigaMeshRows(pl.patch, GigaMeshInvariant::Patch);
+            const GigaMeshRows rows = toGigaMeshRows(features[Invariant::Patch], GigaMeshInvariant::Patch);
             writeGigaMeshMat(gigameshFiles[k++], gigaMeshMatHeader(info), rows);
             if (!sel.volume) plyRows = rows;
         }
@@ -445,14 +455,16 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     j["output"] = fs::absolute(output).string();
     j["parameters"] = {{"radius", args.radius},
                        {"scales", n},
-                       {"radii", inv.radii},
-                       {"voxel_size", result.voxelSize},
+                       {"radii", plan.radii},
+                       {"voxel_size", plan.voxelSize},
                        {"voxel_size_requested", args.voxelSize},
                        {"precision_voxels_per_radius", args.precision},
                        {"precision_patch_line", plPrecisionOf(args)},
-                       {"levels", inv.numLevels},
-                       {"level_of_radius", inv.levelOfRadius},
-                       {"band_half_width_voxels", result.bandHalfWidth},
+                       {"levels", plan.numVolumeSphereLevels()},
+                       {"level_of_radius", plan.volumeSphereLevels},
+                       {"sample_level_of_radius", plan.patchLineLevels},
+                       {"reach", plan.reach},
+                       {"band_half_width_voxels", result.cost.bandHalfWidth},
                        {"invariants", [&] {
                             nlohmann::json list = nlohmann::json::array();
                             for (char c : letters) list.push_back(std::string(1, c));
@@ -480,7 +492,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                  {"faces_in_file", inputFaces},
                  {"faces_removed", [&] {
                       std::size_t removed = 0;
-                      for (const PrepareChange& c : prepared.changes)
+                      for (const Diagnostic& c : prepared.changes)
                           if (c.kind == "degenerate_faces_removed" || c.kind == "duplicate_faces_removed" ||
                               c.kind == "non_manifold_faces_removed")
                               removed += c.count;
@@ -493,15 +505,15 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                  {"diagonal", st.diagonal},
                  {"edge_length", {{"min", st.minEdge}, {"median", st.medianEdge}, {"mean", st.meanEdge}, {"max", st.maxEdge}}},
                  {"area", st.area},
-                 {"masked_values", inv.numMaskedValues}};
-    j["level_set"] = {{"active_voxels", result.levelSetVoxels}, {"bytes", result.levelSetBytes}};
+                 {"masked_values", result.cost.maskedValues}};
+    j["level_set"] = {{"active_voxels", result.cost.levelSetVoxels}, {"bytes", result.cost.levelSetBytes}};
     // The process's peak resident memory so far (Linux VmHWM: of this program only, unlike
     // getrusage, which counts what a parent held when it started the program).
     if (std::ifstream status("/proc/self/status"); status) {
         for (std::string line; std::getline(status, line);)
             if (line.rfind("VmHWM:", 0) == 0) j["peak_memory_bytes"] = std::stod(line.substr(6)) * 1024.0;
     }
-    const auto& t = result.timings;
+    const InvariantsCost& t = result.cost;
     j["timings_seconds"] = {{"read", readSeconds},     {"prepare", prepareSeconds}, {"check", t.check},
                             {"level_set", t.levelSet}, {"occupancy", t.occupancy},
                             {"stencils", t.stencils},  {"interpolation", t.interpolation},
@@ -517,7 +529,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     j["preparation"] = {
         {"changes", [&] {
              nlohmann::json list = nlohmann::json::array();
-             for (const PrepareChange& c : prepared.changes)
+             for (const Diagnostic& c : prepared.changes)
                  list.push_back({{"kind", c.kind}, {"count", c.count}, {"message", c.message}});
              return list;
          }()},
@@ -531,15 +543,23 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
         {"isolated_vertices", prepared.numIsolatedVertices},
         {"prepared_vertices", prepared.mesh.numVertices()},
         {"prepared_faces", prepared.mesh.numTriangles()}};
-    j["warnings"] = result.warnings;
-    for (const PrepareChange& c : prepared.changes) j["warnings"].push_back(c.message);
+    // Coded (kind, count, figures) for programs, and the sentences as printed.
+    j["diagnostics"] = nlohmann::json::array();
+    j["warnings"] = nlohmann::json::array();
+    for (const std::vector<Diagnostic>* list : {&prepared.changes, &result.diagnostics})
+        for (const Diagnostic& d : *list) {
+            nlohmann::json figures = nlohmann::json::object();
+            for (const auto& [name, value] : d.figures) figures[name] = value;
+            j["diagnostics"].push_back({{"kind", d.kind}, {"count", d.count}, {"figures", figures}, {"message", d.message}});
+            j["warnings"].push_back(worded(d));
+        }
     writeTextFileAtomic(sidecar, j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 
     if (!args.quiet)
         std::fprintf(stderr, "msii: %s -> %s (%zu vertices, %.1f s)\n", input.c_str(),
                      output.c_str(), read.mesh.numVertices(),
                      total.seconds());
-    return {read.mesh.numVertices(), result.voxelSize, total.seconds()};
+    return {read.mesh.numVertices(), plan.voxelSize, total.seconds()};
 }
 
 /// Mesh files msii reads, by extension (case-insensitive).
@@ -810,7 +830,7 @@ std::function<int()> addComputeCommand(CLI::App& app)
                                            {"fill_holes", args->fillHoles}};
         std::size_t done = 0, skipped = 0;
         std::vector<std::string> failed;
-        const bool terminal = !args->quiet && Progress::stderrIsTerminal();
+        const bool terminal = !args->quiet && stderrIsTerminal();
         // A failed input: one error line, and the reason in its manifest line.
         const auto fail = [&](const std::string& input, nlohmann::json& line, const std::string& why) {
             failed.push_back(input);

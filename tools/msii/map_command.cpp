@@ -4,8 +4,9 @@
 #include "feature_input.h"
 #include "map_input.h"
 
+#include <msii/core/terminal_progress.h>
 #include <msii/core/errors.h>
-#include <msii/core/progress.h>
+#include <msii/core/run_context.h>
 #include <msii/core/stopwatch.h>
 #include <msii/core/version.h>
 #include <msii/map/feature_map.h>
@@ -59,7 +60,8 @@ int runMap(const MapArgs& args)
     std::string params;
     for (const std::string& c : in.comments) params += (params.empty() ? "" : "\n") + c;
     options.parameters = std::string("msii ") + versionString() + " map --view " + args.view.view + (params.empty() ? "" : "\n" + params);
-    Progress progress(!args.quiet && Progress::stderrIsTerminal());
+    TerminalProgress terminal(!args.quiet && stderrIsTerminal());
+    RunContext progress(terminal.listener());
     const FeatureMapInfo info = writeFeatureMap(output, in.mesh, frame, chosen, options, &progress);
     if (!args.quiet)
         std::fprintf(stderr,

@@ -5,6 +5,7 @@
 #include "feature_input.h"
 #include "map_input.h"
 
+#include <msii/core/terminal_progress.h>
 #include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
 #include <msii/map/feature_map.h>
@@ -92,7 +93,7 @@ Channels channelsFromMap(const std::string& path, const std::string& value, bool
 
 /// The same channels from a mesh rasterised into the frame the view options ask for.
 Channels channelsFromMesh(const std::string& path, const std::vector<std::string>& matFiles, const ViewArgs& view,
-                          const std::string& value, bool needNormals, Progress* progress, bool orRelief = false)
+                          const std::string& value, bool needNormals, RunContext* progress, bool orRelief = false)
 {
     const MapFrameOptions frameOpts = frameOptions(view, kDefaultPixels);
     FeatureMesh in = readFeatureMesh(path, matFiles);
@@ -154,7 +155,8 @@ int runRender(const RenderArgs& args)
         options.centered = true, options.center = args.center;
     }
 
-    Progress progress(!args.quiet && Progress::stderrIsTerminal());
+    TerminalProgress terminal(!args.quiet && stderrIsTerminal());
+    RunContext progress(terminal.listener());
     std::string value;
     // Default: quality when the input has it, else the relief (read in one go).
     const bool automatic = show.empty();

@@ -3,8 +3,9 @@
 #include "commands.h"
 #include "feature_input.h"
 
+#include <msii/core/terminal_progress.h>
 #include <msii/core/errors.h>
-#include <msii/core/progress.h>
+#include <msii/core/run_context.h>
 #include <msii/core/stopwatch.h>
 #include <msii/core/version.h>
 #include <msii/io/write_ply.h>
@@ -82,7 +83,8 @@ int runSmooth(const SmoothArgs& args)
                      "(%.3g), so with --delta global (the paper's choice) the filter hardly changes "
                      "anything; --delta ring uses each ring's own shortest edge\n",
                      info.globalDelta, info.medianEdge);
-    Progress progress(!args.quiet && Progress::stderrIsTerminal());
+    TerminalProgress terminal(!args.quiet && stderrIsTerminal());
+    RunContext progress(terminal.listener());
     for (std::size_t k : chosen) smoother.smooth(in.properties[k].values, &progress);
 
     WritePlyOptions plyOptions;

@@ -5,10 +5,16 @@
 /// and smoothing, feature maps, pictures, components and outlines. docs/library.md shows
 /// its use; docs/method.md the formulas.
 
+#include <msii/core/diagnostics.h>
 #include <msii/core/errors.h>
-#include <msii/core/progress.h>
+#include <msii/core/feature_set.h>
+#include <msii/core/run_context.h>
+#include <msii/core/terminal_progress.h>
 #include <msii/core/version.h>
 #include <msii/invariants/compute.h>
+#include <msii/invariants/exact.h>
+#include <msii/invariants/patch_line.h>
+#include <msii/invariants/volume_sphere.h>
 #include <msii/invariants/scales.h>
 #include <msii/io/feature_properties.h>
 #include <msii/io/write_ply.h>

@@ -5,6 +5,8 @@
 #include <msii/core/stopwatch.h>
 #include <msii/invariants/exact.h>
 #include <msii/invariants/scales.h>
+#include <msii/invariants/patch_line.h>
+#include <msii/invariants/volume_sphere.h>
 #include <msii/levelset/levelset.h>
 #include <msii/mesh/border_distance.h>
 
@@ -28,7 +30,10 @@ double chooseVoxelSize(double medianEdge, const std::vector<double>& radii,
     return std::max(0.5 * medianEdge, first / minVoxelsPerRadius);
 }
 
-ComputeResult prepareComputation(const TriMesh& mesh, const ComputeOptions& options)
+namespace {
+
+/// Parameters and mesh: the refusals of computeInvariants, the check and statistics.
+InvariantsResult checkComputation(const TriMesh& mesh, const InvariantsOptions& options)
 {
     if (!(options.radius > 0) || !std::isfinite(options.radius))
         throw InvalidInputError("the radius must be a positive number");
@@ -41,13 +46,14 @@ ComputeResult prepareComputation(const TriMesh& mesh, const ComputeOptions& opti
         throw InvalidInputError("the precision must be between 1 and 64 voxels per radius");
     if (options.patchLinePrecision != 0 && !(options.patchLinePrecision >= 1 && options.patchLinePrecision <= 64))
         throw InvalidInputError("the P and L precision must be between 1 and 64 cells per radius (or 0: 4/3 of the V and S precision)");
+    if (!options.computeVolume && !options.computeSphere && !options.computePatch && !options.computeLine)
+        throw InvalidInputError("no invariant selected (choose any of V, S, P, L)");
     if (mesh.numVertices() == 0) throw InvalidInputError("the mesh has no vertices");
     if (mesh.numTriangles() == 0) throw InvalidInputError("the mesh has no faces");
 
-    ComputeResult result;
+    InvariantsResult result;
     const Stopwatch stage;
     result.check = checkMesh(mesh);
-    if (result.check.numNonFinitePoints > 0) throw InvalidInputError(result.check.firstProblem());
     if (const std::string problem = result.check.firstProblem(); !problem.empty())
         throw InvalidInputError(problem);
     if (result.check.numInconsistentEdges > 0) {
@@ -58,8 +64,15 @@ ComputeResult prepareComputation(const TriMesh& mesh, const ComputeOptions& opti
         throw InvalidInputError(msg.str());
     }
     result.stats = computeMeshStats(mesh);
-    result.timings.check = stage.seconds();
+    result.cost.check = stage.seconds();
+    return result;
+}
 
+} // namespace
+
+InvariantsResult prepareComputation(const TriMesh& mesh, const InvariantsOptions& options)
+{
+    InvariantsResult result = checkComputation(mesh, options);
     const std::vector<double> radii = equidistantRadii(options.radius, options.scales);
     const double diagonal = result.stats.diagonal;
     if (options.radius > 10.0 * diagonal) {
@@ -68,56 +81,51 @@ ComputeResult prepareComputation(const TriMesh& mesh, const ComputeOptions& opti
             << diagonal << "); use a radius about the size of the largest feature";
         throw InvalidInputError(msg.str());
     }
-    result.voxelSize = options.voxelSize > 0
-                           ? options.voxelSize
-                           : chooseVoxelSize(result.stats.medianEdge, radii,
-                                             options.minVoxelsPerRadius);
+    const double h0 = options.voxelSize > 0
+                          ? options.voxelSize
+                          : chooseVoxelSize(result.stats.medianEdge, radii, options.minVoxelsPerRadius);
     // A grid beyond ~2e9 surface voxels would not fit in memory: say so instead of trying.
-    const double surfaceVoxels = result.stats.area / (result.voxelSize * result.voxelSize);
+    const double surfaceVoxels = result.stats.area / (h0 * h0);
     if (surfaceVoxels > 2e9) {
         std::ostringstream msg;
-        msg << "the voxel size " << result.voxelSize << " is far too small for a surface of area "
-            << result.stats.area;
+        msg << "the voxel size " << h0 << " is far too small for a surface of area " << result.stats.area;
         throw InvalidInputError(msg.str());
     }
+    result.plan = makeScalePlan(radii, h0, options.minVoxelsPerRadius, patchLinePrecision(options));
     if (radii.front() < result.stats.medianEdge) {
         std::ostringstream msg;
         msg << "the smallest radius (" << radii.front() << ") is below the median edge length ("
             << result.stats.medianEdge << "): its values carry little information (paper §3)";
-        result.warnings.push_back(msg.str());
+        result.diagnostics.push_back({"smallest_radius_below_edge",
+                                      0,
+                                      {{"radius", radii.front()}, {"median_edge", result.stats.medianEdge}},
+                                      msg.str()});
     }
     return result;
 }
 
-double patchLinePrecision(const ComputeOptions& options)
+double patchLinePrecision(const InvariantsOptions& options)
 {
     return options.patchLinePrecision > 0 ? options.patchLinePrecision : 4.0 / 3.0 * options.minVoxelsPerRadius;
 }
 
-double coarsestPrecision(const ComputeOptions& options)
+void countMaskedVertices(const FeatureSet& features, std::vector<std::size_t>& counts)
 {
-    return std::min(options.minVoxelsPerRadius, patchLinePrecision(options));
+    const std::vector<Invariant> present = features.invariants();
+    if (present.empty()) return;
+    const FeatureColumns& columns = features[present.front()];
+    counts.resize(columns.size(), 0);
+    for (std::size_t j = 0; j < columns.size(); ++j)
+        for (float v : columns[j]) counts[j] += std::isnan(v);
 }
 
-void countMaskedVertices(const ComputeResult& result, std::vector<std::size_t>& counts)
+std::optional<Diagnostic> mostlyMasked(const std::vector<double>& radii, const std::vector<std::size_t>& maskedPerRadius,
+                                       std::size_t numVertices)
 {
-    for (const auto* columns : {&result.invariants.volume, &result.invariants.sphere, &result.patchLine.patch,
-                                &result.patchLine.line}) {
-        if (columns->empty()) continue;
-        counts.resize(columns->size(), 0);
-        for (std::size_t j = 0; j < columns->size(); ++j)
-            for (float v : (*columns)[j]) counts[j] += std::isnan(v);
-        return;
-    }
-}
-
-std::string mostlyMaskedWarning(const std::vector<double>& radii, const std::vector<std::size_t>& maskedPerRadius,
-                                std::size_t numVertices)
-{
-    if (numVertices == 0 || radii.empty() || maskedPerRadius.size() != radii.size()) return {};
+    if (numVertices == 0 || radii.empty() || maskedPerRadius.size() != radii.size()) return std::nullopt;
     const auto share = [&](std::size_t j) { return double(maskedPerRadius[j]) / double(numVertices); };
     const std::size_t last = radii.size() - 1;
-    if (share(last) <= 0.5) return {};
+    if (share(last) <= 0.5) return std::nullopt;
     std::ostringstream msg;
     msg << std::setprecision(3) << int(std::lround(100.0 * share(last)))
         << " % of the vertices are masked (NaN) at the largest radius " << radii[last]
@@ -129,113 +137,143 @@ std::string mostlyMaskedWarning(const std::vector<double>& radii, const std::vec
         msg << "more than half are even at the smallest radius: fill the holes or use a much smaller largest radius";
     else
         msg << "at r = " << radii[kept] << " at least half have values: a smaller largest radius keeps more";
-    return msg.str();
+    return Diagnostic{"mostly_masked",
+                      maskedPerRadius[last],
+                      {{"masked_share", share(last)},
+                       {"largest_radius", radii[last]},
+                       {"radius_with_half", kept == radii.size() ? 0.0 : radii[kept]}},
+                      msg.str()};
 }
 
-ComputeResult computeInvariants(const TriMesh& mesh, const ComputeOptions& options, Progress* progress)
+namespace {
+
+/// The exact reference mode: the chosen vertices from the triangles, the rest NaN.
+void computeExactValues(const TriMesh& mesh, const InvariantsOptions& options, const std::vector<double>& border,
+                        InvariantsResult& result, RunContext* context)
+{
+    const Stopwatch stage;
+    const std::vector<double>& radii = result.plan.radii;
+    ExactOptions eo;
+    eo.radii = radii;
+    eo.vertices = options.exactVertices;
+    eo.borderDistance = border;
+    eo.computeVolumeSphere = options.computeVolume || options.computeSphere;
+    eo.computePatchLine = options.computePatch || options.computeLine;
+    const ExactResult exact = computeExact(mesh, eo, context);
+    const std::size_t nv = mesh.numVertices();
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const auto scatter = [&](const std::vector<std::vector<double>>& from, bool wanted) {
+        FeatureColumns to;
+        if (!wanted) return to;
+        to.assign(radii.size(), std::vector<float>(nv, nan));
+        for (std::size_t j = 0; j < radii.size(); ++j)
+            for (std::size_t k = 0; k < exact.vertices.size(); ++k) to[j][exact.vertices[k]] = float(from[j][k]);
+        return to;
+    };
+    result.features[Invariant::Volume] = scatter(exact.volume, options.computeVolume);
+    result.features[Invariant::Sphere] = scatter(exact.sphere, options.computeSphere);
+    result.features[Invariant::Patch] = scatter(exact.patch, options.computePatch);
+    result.features[Invariant::Line] = scatter(exact.line, options.computeLine);
+    result.cost.exact = stage.seconds();
+}
+
+/// The fast mode on one piece, with result.plan made.
+void computeFastValues(const TriMesh& mesh, const InvariantsOptions& options, const std::vector<double>& border,
+                       InvariantsResult& result, RunContext* context)
+{
+    const ScalePlan& plan = result.plan;
+    Stopwatch stage;
+    if (options.computeVolume || options.computeSphere) {
+        LevelSetOptions lsOptions;
+        lsOptions.voxelSize = plan.voxelSize;
+        lsOptions.halfWidth = 2;  // occupancy reads φ within 1 voxel and its neighbours'
+        const LevelSet levelSet = buildLevelSet(mesh, lsOptions, context);
+        result.cost.bandHalfWidth = lsOptions.halfWidth;
+        result.cost.levelSetVoxels = levelSet.info().activeVoxels;
+        result.cost.levelSetBytes = levelSet.info().memoryBytes;
+        result.cost.levelSet = stage.seconds();
+
+        VolumeSphereOptions vsOptions;
+        vsOptions.radii = plan.radii;
+        vsOptions.minVoxelsPerRadius = plan.volumeSpherePrecision;
+        vsOptions.levelOfRadius = plan.volumeSphereLevels;
+        vsOptions.computeSphere = options.computeSphere;
+        vsOptions.borderDistance = border;
+        VolumeSphereResult vs = computeVolumeSphere(mesh, levelSet, vsOptions, context);
+        if (options.computeVolume) result.features[Invariant::Volume] = std::move(vs.volume);
+        result.features[Invariant::Sphere] = std::move(vs.sphere);
+        result.cost.stencilNodes = vs.numNodes;
+        result.cost.maskedValues = options.computeVolume ? vs.numMaskedValues : 0;
+        result.cost.occupancy = vs.occupancySeconds;
+        result.cost.stencils = vs.stencilSeconds;
+        result.cost.interpolation = vs.interpolationSeconds;
+    }
+    if (options.computePatch || options.computeLine) {
+        PatchLineOptions plOptions;
+        plOptions.radii = plan.radii;
+        plOptions.cellSize = plan.voxelSize;
+        plOptions.minCellsPerRadius = plan.patchLinePrecision;
+        plOptions.levelOfRadius = plan.patchLineLevels;
+        plOptions.computePatch = options.computePatch;
+        plOptions.computeLine = options.computeLine;
+        plOptions.borderDistance = border;
+        plOptions.vertexSpacing = options.vertexSpacing > 0 ? options.vertexSpacing : result.stats.medianEdge;
+        PatchLineResult pl = computePatchLine(mesh, plOptions, context);
+        result.features[Invariant::Patch] = std::move(pl.patch);
+        result.features[Invariant::Line] = std::move(pl.line);
+        result.cost.numSamples = pl.numSamples;
+        result.cost.directEvaluations = pl.directEvaluations;
+        result.cost.samples = pl.samplingSeconds;
+        result.cost.patchLine = pl.gatherSeconds;
+    }
+}
+
+/// The values of @p result (checked, with its plan) on one piece of mesh.
+void computeValues(const TriMesh& mesh, const InvariantsOptions& options, InvariantsResult& result,
+                   RunContext* context)
+{
+    const Stopwatch total;
+    result.features.radii = result.plan.radii;
+    // Values are masked where their reach meets a border; distances are searched a little
+    // beyond it (docs/method.md, Borders).
+    std::vector<double> border;
+    if (!result.check.closed)
+        border = borderDistance(mesh, result.check.borderEdges, result.plan.reach + 2.0 * result.plan.voxelSize);
+    if (options.exact)
+        computeExactValues(mesh, options, border, result, context);
+    else
+        computeFastValues(mesh, options, border, result, context);
+    if (!result.check.closed && !options.exact) {
+        std::vector<std::size_t> masked;
+        countMaskedVertices(result.features, masked);
+        if (std::optional<Diagnostic> d = mostlyMasked(result.plan.radii, masked, mesh.numVertices()))
+            result.diagnostics.push_back(std::move(*d));
+    }
+    result.cost.total = result.cost.check + total.seconds();
+}
+
+} // namespace
+
+InvariantsResult computeWithPlan(const TriMesh& mesh, const InvariantsOptions& options, const ScalePlan& plan,
+                                 RunContext* context)
+{
+    if (options.exact) throw InvalidInputError("the exact mode is not tiled (restrict it to chosen vertices instead)");
+    InvariantsResult result = checkComputation(mesh, options);
+    result.plan = plan;
+    computeValues(mesh, options, result, context);
+    return result;
+}
+
+InvariantsResult computeInvariants(const TriMesh& mesh, const InvariantsOptions& options, RunContext* context)
 {
     if (options.memoryBudget != 0 || options.tilesPerAxis != 0) {
         TilingOptions tiling;
         tiling.memoryBudget = options.memoryBudget;
         tiling.tilesPerAxis = options.tilesPerAxis;
-        return computeTiled(mesh, options, tiling, nullptr, progress);  // tiles run untiled
+        return computeTiled(mesh, options, tiling, nullptr, context);
     }
-    const Stopwatch total;
-    ComputeResult result = prepareComputation(mesh, options);
-    Stopwatch stage;
-    const std::vector<double> radii = equidistantRadii(options.radius, options.scales);
-
-    if (!options.computeVolume && !options.computeSphere && !options.computePatch &&
-        !options.computeLine)
-        throw InvalidInputError("no invariant selected (choose any of V, S, P, L)");
-    std::vector<double> border;
-    if (!result.check.closed)
-        border = borderDistance(mesh, result.check.borderEdges,
-                                dependenceReach(radii, result.voxelSize, coarsestPrecision(options)) +
-                                    2.0 * result.voxelSize);
-    const float nan = std::numeric_limits<float>::quiet_NaN();
-
-    if (options.exact) {
-        // Exact reference mode: the chosen vertices from the triangles, the rest NaN.
-        stage.restart();
-        ExactOptions eo;
-        eo.radii = radii;
-        eo.vertices = options.exactVertices;
-        eo.borderDistance = border;
-        eo.computeVolumeSphere = options.computeVolume || options.computeSphere;
-        eo.computePatchLine = options.computePatch || options.computeLine;
-        const ExactResult exact = computeExact(mesh, eo, progress);
-        const std::size_t nv = mesh.numVertices();
-        const auto scatter = [&](const std::vector<std::vector<double>>& from, bool wanted) {
-            std::vector<std::vector<float>> to;
-            if (!wanted) return to;
-            to.assign(radii.size(), std::vector<float>(nv, nan));
-            for (std::size_t j = 0; j < radii.size(); ++j)
-                for (std::size_t k = 0; k < exact.vertices.size(); ++k)
-                    to[j][exact.vertices[k]] = float(from[j][k]);
-            return to;
-        };
-        result.invariants.radii = radii;
-        result.invariants.volume = scatter(exact.volume, options.computeVolume);
-        result.invariants.sphere = scatter(exact.sphere, options.computeSphere);
-        result.patchLine.radii = radii;
-        result.patchLine.patch = scatter(exact.patch, options.computePatch);
-        result.patchLine.line = scatter(exact.line, options.computeLine);
-        result.timings.exact = stage.seconds();
-        result.timings.total = total.seconds();
-        return result;
-    }
-
-    if (options.computeVolume || options.computeSphere) {
-        stage.restart();
-        LevelSetOptions lsOptions;
-        lsOptions.voxelSize = result.voxelSize;
-        lsOptions.halfWidth = 2;  // occupancy reads φ within 1 voxel and its neighbours'
-        const LevelSet levelSet = buildLevelSet(mesh, lsOptions, progress);
-        result.bandHalfWidth = lsOptions.halfWidth;
-        result.levelSetVoxels = levelSet.info().activeVoxels;
-        result.levelSetBytes = levelSet.info().memoryBytes;
-        result.timings.levelSet = stage.seconds();
-
-        VolumeSphereOptions vsOptions;
-        vsOptions.radii = radii;
-        vsOptions.minVoxelsPerRadius = options.minVoxelsPerRadius;
-        vsOptions.computeSphere = options.computeSphere;
-        vsOptions.borderDistance = border;
-        result.invariants = computeVolumeSphere(mesh, levelSet, vsOptions, progress);
-        if (!options.computeVolume) result.invariants.volume.clear();
-        result.timings.occupancy = result.invariants.occupancySeconds;
-        result.timings.stencils = result.invariants.stencilSeconds;
-        result.timings.interpolation = result.invariants.interpolationSeconds;
-    } else {
-        result.invariants.radii = radii;
-        result.invariants.levelOfRadius =
-            volumeSphereLevels(radii, result.voxelSize, options.minVoxelsPerRadius);
-        result.invariants.numLevels =
-            *std::max_element(result.invariants.levelOfRadius.begin(),
-                              result.invariants.levelOfRadius.end()) + 1;
-    }
-
-    if (options.computePatch || options.computeLine) {
-        PatchLineOptions plOptions;
-        plOptions.radii = radii;
-        plOptions.cellSize = result.voxelSize;
-        plOptions.minCellsPerRadius = patchLinePrecision(options);
-        plOptions.computePatch = options.computePatch;
-        plOptions.computeLine = options.computeLine;
-        plOptions.borderDistance = border;
-        plOptions.vertexSpacing = options.vertexSpacing > 0 ? options.vertexSpacing : result.stats.medianEdge;
-        result.patchLine = computePatchLine(mesh, plOptions, progress);
-        result.timings.samples = result.patchLine.samplingSeconds;
-        result.timings.patchLine = result.patchLine.gatherSeconds;
-    }
-    if (!result.check.closed) {
-        std::vector<std::size_t> masked;
-        countMaskedVertices(result, masked);
-        if (std::string w = mostlyMaskedWarning(radii, masked, mesh.numVertices()); !w.empty())
-            result.warnings.push_back(std::move(w));
-    }
-    result.timings.total = total.seconds();
+    InvariantsResult result = prepareComputation(mesh, options);
+    computeValues(mesh, options, result, context);
     return result;
 }
 

@@ -694,7 +694,7 @@ TriangleBallMeasures triangleBallMeasures(const Vec3& p, const Vec3& a, const Ve
 // V of paper Eq. 1 and the four domains V, S, P, L of Eq. 2, normalised as in
 // docs/method.md, Definitions and normalisations; per vertex from sums over the triangles
 // near it (identities: header).
-ExactResult computeExact(const TriMesh& mesh, const ExactOptions& options, Progress* progress)
+ExactResult computeExact(const TriMesh& mesh, const ExactOptions& options, RunContext* progress)
 {
     validate(mesh, options);
     ExactResult result;

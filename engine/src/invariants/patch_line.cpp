@@ -626,7 +626,7 @@ CellGroups groupByCells(const std::vector<Vec3>& points, double h0, int l, int g
 /// the finest level of the benchmark surface, of which 2/3 lie within reach).
 void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                     const std::vector<Vec3>& points, const std::vector<char>& skip,
-                    std::vector<float>& outP, std::vector<float>& outL, Progress* progress)
+                    std::vector<float>& outP, std::vector<float>& outL, RunContext* progress)
 {
     const std::size_t n = points.size();
     const int l = level.index;
@@ -892,7 +892,7 @@ std::vector<int> patchLineLevelOfRadius(const std::vector<double>& radii, double
 }
 
 PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& options,
-                                 Progress* progress)
+                                 RunContext* progress)
 {
     const auto& radii = options.radii;
     validateRadii(radii);
@@ -914,7 +914,10 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
     PatchLineResult result;
     result.radii = radii;
     const std::vector<int> planLevel = gridLevelOfRadius(radii, h0, options.minCellsPerRadius);
-    result.levelOfRadius = patchLineLevelOfRadius(radii, h0, options.minCellsPerRadius);
+    result.levelOfRadius = options.levelOfRadius.empty() ? patchLineLevelOfRadius(radii, h0, options.minCellsPerRadius)
+                                                         : options.levelOfRadius;
+    if (result.levelOfRadius.size() != radii.size())
+        throw InvalidInputError("the sample levels do not match the radii");
     const int numLevels = *std::max_element(result.levelOfRadius.begin(), result.levelOfRadius.end()) + 1;
     const float nan = std::numeric_limits<float>::quiet_NaN();
     if (options.computePatch) result.patch.assign(radii.size(), std::vector<float>(nv, nan));

@@ -1,6 +1,7 @@
 #include <msii/invariants/scales.h>
 
 #include <msii/core/errors.h>
+#include <msii/invariants/patch_line.h>
 
 #include <algorithm>
 #include <cmath>
@@ -63,6 +64,27 @@ double dependenceReach(const std::vector<double>& radii, double h0, double minCe
         reach = std::max(reach, radii[j] + std::max(4.0 * h + 2.0 * h0, patchLine));
     }
     return reach;
+}
+
+int ScalePlan::numVolumeSphereLevels() const
+{
+    return volumeSphereLevels.empty() ? 0 : *std::max_element(volumeSphereLevels.begin(), volumeSphereLevels.end()) + 1;
+}
+
+ScalePlan makeScalePlan(const std::vector<double>& radii, double h0, double volumeSpherePrecision,
+                        double patchLinePrecision)
+{
+    validateRadii(radii);
+    if (!(h0 > 0) || !std::isfinite(h0)) throw InvalidInputError("the voxel size must be positive");
+    ScalePlan plan;
+    plan.radii = radii;
+    plan.voxelSize = h0;
+    plan.volumeSpherePrecision = volumeSpherePrecision;
+    plan.patchLinePrecision = patchLinePrecision;
+    plan.volumeSphereLevels = volumeSphereLevels(radii, h0, volumeSpherePrecision);
+    plan.patchLineLevels = patchLineLevelOfRadius(radii, h0, patchLinePrecision);
+    plan.reach = dependenceReach(radii, h0, std::min(volumeSpherePrecision, patchLinePrecision));
+    return plan;
 }
 
 } // namespace msii

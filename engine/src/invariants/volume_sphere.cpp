@@ -41,12 +41,14 @@ struct LevelPlan {
     std::vector<std::vector<int>> radiiOf;    // per level: radius indices, ascending
 };
 
-LevelPlan planLevels(const std::vector<double>& radii, double h, double k)
+LevelPlan planLevels(const std::vector<int>& levelOf, std::size_t numRadii)
 {
+    if (levelOf.size() != numRadii || *std::min_element(levelOf.begin(), levelOf.end()) < 0)
+        throw InvalidInputError("the grid levels do not match the radii");
     LevelPlan plan;
-    plan.levelOf = volumeSphereLevels(radii, h, k);
+    plan.levelOf = levelOf;
     plan.radiiOf.resize(*std::max_element(plan.levelOf.begin(), plan.levelOf.end()) + 1);
-    for (std::size_t j = 0; j < radii.size(); ++j) plan.radiiOf[plan.levelOf[j]].push_back(int(j));
+    for (std::size_t j = 0; j < numRadii; ++j) plan.radiiOf[std::size_t(plan.levelOf[j])].push_back(int(j));
     return plan;
 }
 
@@ -426,7 +428,7 @@ void removeSmoothingBias(VolumeSphereResult& result, double h0)
 } // namespace
 
 VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& levelSet,
-                                       const VolumeSphereOptions& options, Progress* progress)
+                                       const VolumeSphereOptions& options, RunContext* progress)
 {
     const auto& radii = options.radii;
     validateRadii(radii);
@@ -436,9 +438,12 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
     if (!options.borderDistance.empty() && options.borderDistance.size() != nv)
         throw InvalidInputError("border distances do not match the vertex count");
 
-    const openvdb::FloatGrid& sdf = *levelSet.impl().grid;
+    const openvdb::FloatGrid& sdf = *levelSetImpl(levelSet).grid;
     const double h0 = sdf.voxelSize()[0];
-    const LevelPlan plan = planLevels(radii, h0, options.minVoxelsPerRadius);
+    const LevelPlan plan = planLevels(options.levelOfRadius.empty()
+                                          ? volumeSphereLevels(radii, h0, options.minVoxelsPerRadius)
+                                          : options.levelOfRadius,
+                                      radii.size());
     const int numLevels = int(plan.radiiOf.size());
 
     VolumeSphereResult result;
@@ -452,7 +457,7 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
     // Fine index positions of the vertices, global: p / h, without the grid's shift T (an
     // integer number of voxels, subtracted after rounding down), so that a vertex on a cell
     // face picks the same cell in a tile as in the whole mesh.
-    const std::array<std::int64_t, 3>& shiftIndex = levelSet.impl().shiftIndex;
+    const std::array<std::int64_t, 3>& shiftIndex = levelSetImpl(levelSet).shiftIndex;
     const Coord shiftCoord{int(shiftIndex[0]), int(shiftIndex[1]), int(shiftIndex[2])};
     std::vector<openvdb::Vec3d> globalIndex(nv);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
@@ -479,7 +484,7 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
     fineBox.expand(finePad);
     std::vector<FloatTree::Ptr> occupancy{occupancyFromDistance(sdf)};
     detail::fillTileSides(*occupancy.back(), fineBox, 0.5f, -0.5f,
-                          levelSet.impl().guessedSide.get());
+                          levelSetImpl(levelSet).guessedSide.get());
     if (progress) progress->advance();
     for (int l = 1; l < numLevels; ++l) {
         occupancy.push_back(restrictOccupancy(*occupancy.back()));
@@ -615,7 +620,7 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
                             } else {
                                 const openvdb::Vec3d w =
                                     (fineIndexOf(ijk, level) + openvdb::Vec3d(shiftCoord.asVec3d())) * h0;
-                                nodePhi[n] = float(levelSet.impl().distance->exactSignedDistance(
+                                nodePhi[n] = float(levelSetImpl(levelSet).distance->exactSignedDistance(
                                     Vec3(w.x(), w.y(), w.z()), std::uint32_t(seedVertex[n]), 4.0 * h0));
                             }
                         }
@@ -638,7 +643,7 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
         // only through the curvature term.
         stage.restart();
         const double margin = 4.0 * hl + 2.0 * h0;
-        const auto& distance = *levelSet.impl().distance;
+        const auto& distance = *levelSetImpl(levelSet).distance;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
             openvdb::tree::ValueAccessor<const Int32Tree> acc(nodes);
             for (std::size_t i = r.begin(); i < r.end(); ++i) {

@@ -7,32 +7,20 @@
 
 namespace msii {
 
-namespace {
-std::array<std::pair<char, const FeatureColumns*>, 4> ordered(const Features& f)
-{
-    return {{{'V', f.volume}, {'S', f.sphere}, {'P', f.patch}, {'L', f.line}}};
-}
-} // namespace
-
-Features featuresOf(const VolumeSphereResult& vs, const PatchLineResult& pl)
-{
-    return {&vs.volume, &vs.sphere, &pl.patch, &pl.line};
-}
-
 std::string featureName(char letter, std::size_t j)
 {
     const std::string digits = std::to_string(j + 1);
     return std::string(1, letter) + (digits.size() < 2 ? "_0" : "_") + digits;
 }
 
-std::vector<VertexProperty> featureProperties(const Features& features)
+std::vector<VertexProperty> featureProperties(const FeatureSet& features)
 {
     std::vector<VertexProperty> props;
     const FeatureColumns* quality = nullptr;
-    for (const auto& [letter, columns] : ordered(features)) {
-        if (!columns || columns->empty()) continue;
+    for (Invariant inv : features.invariants()) {
+        const FeatureColumns* columns = &features[inv];
         for (std::size_t j = 0; j < columns->size(); ++j)
-            props.push_back({featureName(letter, j), (*columns)[j]});
+            props.push_back({featureName(invariantLetter(inv), j), (*columns)[j]});
         if (!quality) quality = columns;
     }
     if (quality) {
@@ -53,17 +41,16 @@ std::vector<VertexProperty> featureProperties(const Features& features)
     return props;
 }
 
-float qualityStandIn(const Features& features)
+float qualityStandIn(const FeatureSet& features)
 {
-    for (const auto& [letter, columns] : ordered(features))
-        if (columns && !columns->empty()) return letter == 'V' || letter == 'S' ? 0.5f : 1.0f;
+    for (Invariant inv : features.invariants())
+        return inv == Invariant::Volume || inv == Invariant::Sphere ? 0.5f : 1.0f;
     return std::numeric_limits<float>::quiet_NaN();
 }
 
-std::string qualitySource(const Features& features)
+std::string qualitySource(const FeatureSet& features)
 {
-    for (const auto& [letter, columns] : ordered(features))
-        if (columns && !columns->empty()) return featureName(letter, columns->size() - 1);
+    for (Invariant inv : features.invariants()) return featureName(invariantLetter(inv), features[inv].size() - 1);
     return "";
 }
 

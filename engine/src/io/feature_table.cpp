@@ -8,6 +8,7 @@
 #include <cctype>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <sstream>
 
 namespace msii {
@@ -21,13 +22,9 @@ std::vector<Invariant> parseInvariantList(const std::string& text)
         item.erase(0, item.find_first_not_of(" \t"));
         item.erase(item.find_last_not_of(" \t") + 1);
         if (item.empty()) continue;
-        Invariant inv;
-        if (item.size() == 1 && std::toupper(item[0]) == 'V') inv = Invariant::Volume;
-        else if (item.size() == 1 && std::toupper(item[0]) == 'S') inv = Invariant::Sphere;
-        else if (item.size() == 1 && std::toupper(item[0]) == 'P') inv = Invariant::Patch;
-        else if (item.size() == 1 && std::toupper(item[0]) == 'L') inv = Invariant::Line;
-        else
-            throw InvalidInputError("unknown invariant '" + item + "' (use V, S, P or L, comma-separated)");
+        const std::optional<Invariant> letter = item.size() == 1 ? invariantOfLetter(item[0]) : std::nullopt;
+        if (!letter) throw InvalidInputError("unknown invariant '" + item + "' (use V, S, P or L, comma-separated)");
+        const Invariant inv = *letter;
         if (std::find(out.begin(), out.end(), inv) != out.end())
             throw InvalidInputError("invariant '" + item + "' is listed twice");
         out.push_back(inv);

@@ -34,6 +34,8 @@ LevelSet& LevelSet::operator=(LevelSet&&) noexcept = default;
 
 const LevelSetInfo& LevelSet::info() const { return mImpl->info; }
 
+const LevelSet::Impl& levelSetImpl(const LevelSet& levelSet) { return *levelSet.mImpl; }
+
 double LevelSet::signedDistance(const Vec3& world) const
 {
     const openvdb::Vec3d xyz = mImpl->grid->transform().worldToIndex(
@@ -41,7 +43,7 @@ double LevelSet::signedDistance(const Vec3& world) const
     return openvdb::tools::BoxSampler::sample(mImpl->grid->tree(), xyz);
 }
 
-LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options, Progress* progress)
+LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options, RunContext* progress)
 {
     initializeOpenVdb();
     const double h = options.voxelSize;

@@ -26,4 +26,6 @@ struct LevelSet::Impl {
     std::shared_ptr<const openvdb::MaskTree> guessedSide;
 };
 
+const LevelSet::Impl& levelSetImpl(const LevelSet& levelSet);
+
 } // namespace msii

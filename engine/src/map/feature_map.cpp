@@ -99,7 +99,7 @@ ExrCompression parseExrCompression(const std::string& name)
 
 FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, const MapFrame& frame,
                                const std::vector<VertexProperty>& properties,
-                               const FeatureMapOptions& options, Progress* progress)
+                               const FeatureMapOptions& options, RunContext* progress)
 {
     static const std::set<std::string> reserved{"height", "normal.x", "normal.y", "normal.z", "mask"};
     std::set<std::string> seen;

@@ -50,7 +50,7 @@ std::vector<float> coverageMask(const PixelHits& hits)
     return mask;
 }
 
-PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, Progress* progress)
+PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, RunContext* progress)
 {
     PixelHits hits;
     hits.width = frame.width;

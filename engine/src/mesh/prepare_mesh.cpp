@@ -319,7 +319,7 @@ PrepareMeshResult prepareMesh(const TriMesh& input, const PrepareMeshOptions& op
     // A repair made, or with repair off the reason to refuse the mesh.
     const auto change = [&](const char* kind, std::size_t count, const std::string& problem, const std::string& done) {
         if (!options.repair) throw InvalidInputError("the mesh has " + problem + ", and repair is off");
-        result.changes.push_back({kind, count, done});
+        result.changes.push_back({kind, count, {}, done});
     };
 
     // 2. Vertices at the same position become one.
@@ -427,10 +427,14 @@ PrepareMeshResult prepareMesh(const TriMesh& input, const PrepareMeshOptions& op
             msg << "filled " << plural(result.holes.numFilled, "hole", "holes") << " for the computation (the longest "
                 << result.holes.largestPerimeter << " around, " << result.holes.areaAdded
                 << " of area added); values near them rest partly on the filled surface (filled_share)";
-            result.changes.push_back({"holes_filled", result.holes.numFilled, msg.str()});
+            result.changes.push_back({"holes_filled",
+                                      result.holes.numFilled,
+                                      {{"largest_perimeter", result.holes.largestPerimeter},
+                                       {"area_added", result.holes.areaAdded}},
+                                      msg.str()});
         }
         if (result.holes.numFailed > 0)
-            result.changes.push_back({"holes_not_filled", result.holes.numFailed,
+            result.changes.push_back({"holes_not_filled", result.holes.numFailed, {},
                                       "could not fill " + plural(result.holes.numFailed, "hole", "holes") +
                                           "; values near them stay masked"});
     }
@@ -438,7 +442,7 @@ PrepareMeshResult prepareMesh(const TriMesh& input, const PrepareMeshOptions& op
         result.filledShare = result.holes.numFilled > 0 ? filledShareOf(mesh, result.firstFillTriangle, options.radius)
                                                         : std::vector<float>(mesh.numVertices(), 0.0f);
     if (result.numIsolatedVertices > 0)
-        result.changes.push_back({"isolated_vertices", result.numIsolatedVertices,
+        result.changes.push_back({"isolated_vertices", result.numIsolatedVertices, {},
                                   plural(result.numIsolatedVertices, "vertex belongs", "vertices belong") +
                                       " to no face: no values there (NaN)"});
     return result;

@@ -485,17 +485,6 @@ std::vector<float> normalizedEuclidean(const FeatureTable& table, const std::vec
 
 } // namespace
 
-char invariantLetter(Invariant invariant)
-{
-    switch (invariant) {
-    case Invariant::Volume: return 'V';
-    case Invariant::Sphere: return 'S';
-    case Invariant::Patch: return 'P';
-    case Invariant::Line: return 'L';
-    }
-    return '?';
-}
-
 std::size_t FeatureTable::dimension() const
 {
     std::size_t dim = 0;

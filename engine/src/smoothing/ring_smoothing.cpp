@@ -483,7 +483,7 @@ const SmoothingInfo& RingSmoother::info() const { return mImpl->info; }
 
 const SmoothingOptions& RingSmoother::options() const { return mImpl->options; }
 
-void RingSmoother::smooth(std::vector<float>& values, Progress* progress) const
+void RingSmoother::smooth(std::vector<float>& values, RunContext* progress) const
 {
     const Impl& impl = *mImpl;
     const std::size_t n = impl.numVertices;
@@ -529,7 +529,7 @@ void RingSmoother::smooth(std::vector<float>& values, Progress* progress) const
 }
 
 SmoothingInfo smoothField(const TriMesh& mesh, std::vector<float>& values,
-                          const SmoothingOptions& options, Progress* progress)
+                          const SmoothingOptions& options, RunContext* progress)
 {
     const RingSmoother smoother(mesh, options);
     smoother.smooth(values, progress);

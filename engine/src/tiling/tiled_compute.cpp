@@ -163,8 +163,8 @@ namespace {
 
 /// The tiled computation; with @p keepColumns the result columns for the whole mesh count
 /// against the memory budget (computeTiled), else not (computeTiles).
-ComputeResult runTiles(const TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling, bool keepColumns,
-                       const TileSink& sink, TiledComputeInfo* info, Progress* progress)
+InvariantsResult runTiles(const TriMesh& mesh, const InvariantsOptions& options, const TilingOptions& tiling, bool keepColumns,
+                       const TileSink& sink, TiledComputeInfo* info, RunContext* progress)
 {
     const Stopwatch total;
     if (options.exact) throw InvalidInputError("the exact mode is not tiled (restrict it to chosen vertices instead)");
@@ -172,12 +172,10 @@ ComputeResult runTiles(const TriMesh& mesh, const ComputeOptions& options, const
         throw InvalidInputError("the memory budget must be a positive number of bytes");
     if (tiling.tilesPerAxis < 0 || tiling.tilesPerAxis > 1024)
         throw InvalidInputError("the tiles per axis must be between 1 and 1024");
-    ComputeResult plan = prepareComputation(mesh, options);
-    const std::vector<double> radii = equidistantRadii(options.radius, options.scales);
-    const std::vector<int> levels = volumeSphereLevels(radii, plan.voxelSize, options.minVoxelsPerRadius);
-    const double h0 = plan.voxelSize;
+    const InvariantsResult whole = prepareComputation(mesh, options);
+    const ScalePlan& plan = whole.plan;
     // Border distances are searched up to the values' reach + 2 h_0 (computeInvariants).
-    const double halo = dependenceReach(radii, h0, coarsestPrecision(options)) + 4.0 * h0;
+    const double halo = plan.reach + 4.0 * plan.voxelSize;
 
     // Memory: the mesh (points, triangles), the tiles' vertex and triangle lists (halos make
     // the latter about 1.2-1.5 times the triangles) and local indices stay whole, and with
@@ -198,10 +196,10 @@ ComputeResult runTiles(const TriMesh& mesh, const ComputeOptions& options, const
                                     (keepColumns ? " and its results alone take " : " alone takes ") + readableBytes(fixedBytes));
         const double allowed = tiling.memoryBudget > 0 ? (tiling.memoryBudget - fixedBytes) / perVertex
                                                        : std::numeric_limits<double>::max();
-        const Vec3 ext = plan.stats.bboxMax - plan.stats.bboxMin;
+        const Vec3 ext = whole.stats.bboxMax - whole.stats.bboxMin;
         const double longest = std::max({ext.x, ext.y, ext.z});
         for (n = 1;; ++n) {
-            grid = makeGrid(plan.stats, n);
+            grid = makeGrid(whole.stats, n);
             sizes = grownTileSizes(mesh, grid, halo);
             if (double(*std::max_element(sizes.begin(), sizes.end())) <= allowed) break;
             // Tiles much narrower than their halo would be mostly halo: give up.
@@ -218,18 +216,15 @@ ComputeResult runTiles(const TriMesh& mesh, const ComputeOptions& options, const
             }
         }
     } else {
-        grid = makeGrid(plan.stats, n);
+        grid = makeGrid(whole.stats, n);
         sizes = grownTileSizes(mesh, grid, halo);
     }
     if (tiling.onlyTile >= n * n)
         throw InvalidInputError("tile " + std::to_string(tiling.onlyTile) + " does not exist (there are " +
                                 std::to_string(n * n) + " tiles, 0 to " + std::to_string(n * n - 1) + ")");
 
-    ComputeResult result = plan;
-    result.invariants.radii = result.patchLine.radii = radii;
-    result.invariants.levelOfRadius = levels;
-    result.patchLine.levelOfRadius = patchLineLevelOfRadius(radii, plan.voxelSize, patchLinePrecision(options));
-    result.invariants.numLevels = *std::max_element(levels.begin(), levels.end()) + 1;
+    InvariantsResult result = whole;
+    result.features.radii = plan.radii;
 
     // Each tile's own vertices and the triangles of its grown box, sorted out in one pass each.
     const std::size_t numTiles = std::size_t(n) * std::size_t(n);
@@ -239,10 +234,9 @@ ComputeResult runTiles(const TriMesh& mesh, const ComputeOptions& options, const
     const Buckets tileTriangles = trianglesOfGrownTiles(mesh, grid, halo, tiling.onlyTile);
     std::size_t tilesWithVertices = 0;
     for (int t = 0; t < n * n; ++t) tilesWithVertices += ownVertices.begin(t) != ownVertices.end(t);
-    ComputeOptions tileOptions = options;
+    InvariantsOptions tileOptions = options;
     tileOptions.memoryBudget = 0, tileOptions.tilesPerAxis = 0;  // each tile in one piece
-    tileOptions.voxelSize = plan.voxelSize;  // the whole mesh's grid, so that tiles agree
-    tileOptions.vertexSpacing = options.vertexSpacing > 0 ? options.vertexSpacing : plan.stats.medianEdge;
+    tileOptions.vertexSpacing = options.vertexSpacing > 0 ? options.vertexSpacing : whole.stats.medianEdge;
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
     const float nan = std::numeric_limits<float>::quiet_NaN();
     std::size_t computed = 0, masked = 0;
@@ -275,7 +269,7 @@ ComputeResult runTiles(const TriMesh& mesh, const ComputeOptions& options, const
             const std::size_t tiles = tiling.onlyTile >= 0 ? 1 : tilesWithVertices;
             progress->setPrefix("tile " + std::to_string(computed + 1) + " of " + std::to_string(tiles) + ": ");
         }
-        ComputeResult values = computeInvariants(tile, tileOptions, progress);
+        InvariantsResult values = computeWithPlan(tile, tileOptions, plan, progress);  // the whole mesh's plan
         if (progress) progress->setPrefix("");
         tile = TriMesh();
         // Keep the rows of the tile's own vertices, in their global order.
@@ -289,30 +283,29 @@ ComputeResult runTiles(const TriMesh& mesh, const ComputeOptions& options, const
                 column.swap(kept);
             }
         };
-        own(values.invariants.volume);
-        own(values.invariants.sphere);
-        own(values.patchLine.patch);
-        own(values.patchLine.line);
+        for (FeatureColumns& columns : values.features.columns) own(columns);
         for (std::uint32_t v : global) local[v] = kNone;
         global.clear();
-        for (const auto& column : values.invariants.volume)  // counted as computeVolumeSphere does
+        for (const auto& column : values.features[Invariant::Volume])  // counted as computeVolumeSphere does
             for (float v : column) masked += std::isnan(v);
-        countMaskedVertices(values, maskedPerRadius);
-        const ComputeTimings& pt = values.timings;
-        ComputeTimings& rt = result.timings;
+        countMaskedVertices(values.features, maskedPerRadius);
+        const InvariantsCost& pt = values.cost;
+        InvariantsCost& rt = result.cost;
         rt.levelSet += pt.levelSet, rt.occupancy += pt.occupancy, rt.stencils += pt.stencils;
         rt.interpolation += pt.interpolation, rt.samples += pt.samples, rt.patchLine += pt.patchLine;
-        result.levelSetVoxels += values.levelSetVoxels;
-        result.levelSetBytes = std::max(result.levelSetBytes, values.levelSetBytes);
-        result.bandHalfWidth = values.bandHalfWidth;
+        rt.levelSetVoxels += pt.levelSetVoxels;
+        rt.levelSetBytes = std::max(rt.levelSetBytes, pt.levelSetBytes);
+        rt.bandHalfWidth = pt.bandHalfWidth;
+        rt.stencilNodes += pt.stencilNodes, rt.numSamples += pt.numSamples;
+        rt.directEvaluations += pt.directEvaluations;
         part.values = std::move(values);
         sink(part);
         ++computed;
     }
-    result.invariants.numMaskedValues = masked;
-    if (!plan.check.closed && tiling.onlyTile < 0)
-        if (std::string w = mostlyMaskedWarning(radii, maskedPerRadius, nv); !w.empty())
-            result.warnings.push_back(std::move(w));
+    result.cost.maskedValues = masked;
+    if (!whole.check.closed && tiling.onlyTile < 0)
+        if (std::optional<Diagnostic> d = mostlyMasked(plan.radii, maskedPerRadius, nv))
+            result.diagnostics.push_back(std::move(*d));
     if (info) {
         info->tilesPerAxis = n;
         info->tiles = computed;
@@ -320,45 +313,39 @@ ComputeResult runTiles(const TriMesh& mesh, const ComputeOptions& options, const
         info->haloWidth = halo;
         info->estimatedPeakBytes = fixedBytes + perVertex * double(info->largestTileVertices);
     }
-    result.timings.total = total.seconds();
+    result.cost.total = total.seconds();
     return result;
 }
 
 } // namespace
 
-ComputeResult computeTiles(const TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
-                           const TileSink& sink, TiledComputeInfo* info, Progress* progress)
+InvariantsResult computeTiles(const TriMesh& mesh, const InvariantsOptions& options, const TilingOptions& tiling,
+                           const TileSink& sink, TiledComputeInfo* info, RunContext* progress)
 {
     return runTiles(mesh, options, tiling, false, sink, info, progress);
 }
 
-ComputeResult computeTiled(const TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
-                           TiledComputeInfo* info, Progress* progress)
+InvariantsResult computeTiled(const TriMesh& mesh, const InvariantsOptions& options, const TilingOptions& tiling,
+                           TiledComputeInfo* info, RunContext* progress)
 {
     // Result columns for the whole mesh, NaN until a tile fills them.
     const std::size_t nv = mesh.numVertices();
     const float nan = std::numeric_limits<float>::quiet_NaN();
-    VolumeSphereResult vs;
-    PatchLineResult pl;
+    FeatureSet all;
     const auto scatter = [&](std::vector<std::vector<float>>& to, const std::vector<std::vector<float>>& from,
                              const std::vector<std::uint32_t>& vertices) {
         if (to.empty()) to.assign(from.size(), std::vector<float>(nv, nan));
         for (std::size_t j = 0; j < from.size(); ++j)
             for (std::size_t l = 0; l < vertices.size(); ++l) to[j][vertices[l]] = from[j][l];
     };
-    ComputeResult result = runTiles(
+    InvariantsResult result = runTiles(
         mesh, options, tiling, true,
         [&](const TileResult& part) {
-            scatter(vs.volume, part.values.invariants.volume, part.vertices);
-            scatter(vs.sphere, part.values.invariants.sphere, part.vertices);
-            scatter(pl.patch, part.values.patchLine.patch, part.vertices);
-            scatter(pl.line, part.values.patchLine.line, part.vertices);
+            for (Invariant i : kAllInvariants) scatter(all[i], part.values.features[i], part.vertices);
         },
         info, progress);
-    result.invariants.volume = std::move(vs.volume);
-    result.invariants.sphere = std::move(vs.sphere);
-    result.patchLine.patch = std::move(pl.patch);
-    result.patchLine.line = std::move(pl.line);
+    all.radii = result.features.radii;
+    result.features = std::move(all);
     return result;
 }
 

@@ -4,20 +4,22 @@
 /// build the level set, compute the invariants, mask what reaches a border. I/O is left to
 /// the caller (tools/msii), so tests and other programs run exactly what users run.
 
-#include <msii/core/progress.h>
-#include <msii/invariants/patch_line.h>
-#include <msii/invariants/volume_sphere.h>
+#include <msii/core/diagnostics.h>
+#include <msii/core/feature_set.h>
+#include <msii/core/run_context.h>
+#include <msii/invariants/scales.h>
 #include <msii/mesh/mesh_check.h>
 #include <msii/mesh/mesh_stats.h>
 #include <msii/mesh/trimesh.h>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace msii {
 
-struct ComputeOptions {
+struct InvariantsOptions {
     double radius = 0;              ///< largest radius R (mesh units); required
     int scales = 16;                ///< N: radii r_j = j·R/N
     /// Finest voxel edge; 0 = automatic (chooseVoxelSize).
@@ -47,31 +49,33 @@ struct ComputeOptions {
     int tilesPerAxis = 0;
 };
 
-struct ComputeTimings {
+/// What a computation cost: sizes, counts and time per stage (not results).
+struct InvariantsCost {
+    double bandHalfWidth = 0;                         ///< of the level set, voxels
+    std::size_t levelSetVoxels = 0, levelSetBytes = 0;
+    std::size_t stencilNodes = 0;                     ///< V and S stencil evaluations, all levels
+    std::size_t numSamples = 0;                       ///< P and L samples on the finest level
+    std::size_t directEvaluations = 0;                ///< PatchLineResult::directEvaluations
+    std::size_t maskedValues = 0;                     ///< vertex·radius pairs of V masked (NaN)
+    /// Seconds per stage; P and L: sampling the surface, kernel sums.
     double check = 0, levelSet = 0, occupancy = 0, stencils = 0, interpolation = 0;
-    double samples = 0, patchLine = 0;  ///< P and L: sampling the surface, kernel sums
-    double exact = 0;                   ///< exact mode
+    double samples = 0, patchLine = 0, exact = 0;
     double total = 0;
 };
 
-struct ComputeResult {
-    /// V and S (the columns of the invariants not asked for are empty), and the grid plan.
-    VolumeSphereResult invariants;
-    PatchLineResult patchLine;         ///< P and L (columns empty if not asked for)
+struct InvariantsResult {
+    /// V, S, P and L per vertex and radius (those not asked for have no columns), NaN where
+    /// masked; radii as the plan's.
+    FeatureSet features;
+    ScalePlan plan;                       ///< radii, voxel size, levels, reach
     MeshStats stats;
     MeshCheckResult check;
-    double voxelSize = 0;              ///< finest voxel edge used
-    double bandHalfWidth = 0;          ///< voxels
-    std::size_t levelSetVoxels = 0, levelSetBytes = 0;
-    ComputeTimings timings;
-    std::vector<std::string> warnings; ///< things the user should know (one sentence each)
+    std::vector<Diagnostic> diagnostics;  ///< what the user should know (core/diagnostics.h)
+    InvariantsCost cost;
 };
 
 /// Cells per radius of P and L: patchLinePrecision, or 4/3 · minVoxelsPerRadius if that is 0.
-double patchLinePrecision(const ComputeOptions& options);
-/// The smaller of the two precisions: the coarsest grid levels, which reach farthest
-/// (dependenceReach of invariants/scales.h).
-double coarsestPrecision(const ComputeOptions& options);
+double patchLinePrecision(const InvariantsOptions& options);
 
 /// The automatic voxel size: fine enough that the first radius of at least 3 median edge
 /// lengths has r/h >= minVoxelsPerRadius, but not finer than half the median edge (the mesh
@@ -81,28 +85,34 @@ double chooseVoxelSize(double medianEdge, const std::vector<double>& radii,
                        double minVoxelsPerRadius);
 
 /// The checks and set-up of computeInvariants without the computation: parameters, mesh
-/// check, statistics, voxel size and warnings, in a result whose feature columns
-/// are empty. Used by the tiled computation, which plans on the whole mesh.
+/// check, statistics, the scale plan and diagnostics, in a result without features. The
+/// tiled computation plans on the whole mesh with it.
 /// @throw InvalidInputError as computeInvariants.
-ComputeResult prepareComputation(const TriMesh& mesh, const ComputeOptions& options);
+InvariantsResult prepareComputation(const TriMesh& mesh, const InvariantsOptions& options);
+
+/// computeInvariants on one piece (untiled, not exact) with a plan made beforehand: the
+/// tiles of a tiled computation, which all take the whole mesh's plan.
+/// @throw InvalidInputError as computeInvariants.
+InvariantsResult computeWithPlan(const TriMesh& mesh, const InvariantsOptions& options, const ScalePlan& plan,
+                                 RunContext* context = nullptr);
 
 /// Adds to @p counts (resized to the radii) the vertices whose value is NaN at each radius,
 /// in the first invariant computed (V, S, P, L): the masked ones, for a sum over tiles.
-void countMaskedVertices(const ComputeResult& result, std::vector<std::size_t>& counts);
+void countMaskedVertices(const FeatureSet& features, std::vector<std::size_t>& counts);
 
-/// A warning when more than half of @p numVertices are masked at the largest radius (their
-/// ball reaches a border of the open mesh: many holes, or a radius large for the patch),
-/// naming the largest radius at which at least half have values; empty otherwise.
-std::string mostlyMaskedWarning(const std::vector<double>& radii,
-                                const std::vector<std::size_t>& maskedPerRadius,
-                                std::size_t numVertices);
+/// The "mostly_masked" diagnostic when more than half of @p numVertices are masked at the
+/// largest radius (their ball reaches a border of the open mesh: many holes, or a radius
+/// large for the patch), with the largest radius at which at least half have values
+/// (figure radius_with_half, 0 if none); none otherwise.
+std::optional<Diagnostic> mostlyMasked(const std::vector<double>& radii,
+                                       const std::vector<std::size_t>& maskedPerRadius, std::size_t numVertices);
 
 /// Runs the job on @p mesh, which must be usable as it is: prepare scans first with
 /// mesh/prepare_mesh.h (repair, hole filling), which is what `msii compute` does. The one
 /// entry point for fast, exact and tiled runs (options.exact, options.memoryBudget /
 /// tilesPerAxis); tiling/tiled_compute.h also streams tiles to a sink.
 /// @throw InvalidInputError for unusable meshes or parameters, with one clear sentence.
-ComputeResult computeInvariants(const TriMesh& mesh, const ComputeOptions& options,
-                                Progress* progress = nullptr);
+InvariantsResult computeInvariants(const TriMesh& mesh, const InvariantsOptions& options,
+                                RunContext* context = nullptr);
 
 } // namespace msii

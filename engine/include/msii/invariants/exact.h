@@ -26,7 +26,7 @@
 /// plain per-triangle sums to rounding (~1e-14). Each vertex is evaluated by one thread,
 /// so results do not depend on the thread count.
 
-#include <msii/core/progress.h>
+#include <msii/core/run_context.h>
 #include <msii/core/vec3.h>
 #include <msii/mesh/trimesh.h>
 
@@ -67,7 +67,7 @@ struct ExactResult {
 ///        ascending, a vertex index is out of range, or borderDistance is neither empty nor
 ///        one value per vertex.
 ExactResult computeExact(const TriMesh& mesh, const ExactOptions& options,
-                         Progress* progress = nullptr);
+                         RunContext* context = nullptr);
 
 /// The three integrals of one triangle over the ball B_r(p), the building block of
 /// computeExact().

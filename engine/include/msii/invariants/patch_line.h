@@ -29,7 +29,7 @@
 ///    towards those within about h/2; vertices on creases and corners, where that fails,
 ///    are evaluated where they are.
 
-#include <msii/core/progress.h>
+#include <msii/core/run_context.h>
 #include <msii/mesh/trimesh.h>
 
 #include <cstddef>
@@ -42,6 +42,9 @@ struct PatchLineOptions {
     double cellSize = 0;             ///< h0, the finest sample cell (msii uses the voxel size)
     /// A radius is evaluated on the coarsest level with r/h at least this (as for V and S).
     double minCellsPerRadius = 6.0;
+    /// The sample level of each radius (ScalePlan::patchLineLevels); empty =
+    /// patchLineLevelOfRadius(radii, cellSize, minCellsPerRadius).
+    std::vector<int> levelOfRadius;
     bool computePatch = true;        ///< P
     bool computeLine = true;         ///< L
     /// Per-vertex distance to the nearest border (mesh/border_distance.h); empty = closed.
@@ -84,6 +87,6 @@ std::vector<int> patchLineLevelOfRadius(const std::vector<double>& radii, double
 /// @throw InvalidInputError if radii are empty, not ascending or not positive, or the cell
 /// size is not positive or too small for the mesh's extent.
 PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& options,
-                                 Progress* progress = nullptr);
+                                 RunContext* context = nullptr);
 
 } // namespace msii

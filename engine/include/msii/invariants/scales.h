@@ -41,4 +41,24 @@ std::vector<int> volumeSphereLevels(const std::vector<double>& radii, double h0,
 /// those of the whole mesh (docs/method.md, Tiling).
 double dependenceReach(const std::vector<double>& radii, double h0, double minCellsPerRadius);
 
+/// Everything the scales decide, worked out once per computation (makeScalePlan) and passed
+/// to V and S, P and L, the border mask and every tile, so that they cannot disagree.
+struct ScalePlan {
+    std::vector<double> radii;               ///< r_j = j·R/N, ascending (mesh units)
+    double voxelSize = 0;                    ///< h0: the finest voxel edge and sample cell
+    double volumeSpherePrecision = 0;        ///< V and S: voxels per radius at least
+    double patchLinePrecision = 0;           ///< P and L: sample cells per radius at least
+    std::vector<int> volumeSphereLevels;     ///< per radius: V and S's grid level (volumeSphereLevels)
+    std::vector<int> patchLineLevels;        ///< per radius: P and L's sample level (patchLineLevelOfRadius)
+    /// How far from a vertex its values may depend on the mesh (dependenceReach at the
+    /// smaller precision, whose coarser levels reach farther).
+    double reach = 0;
+    int numVolumeSphereLevels() const;
+};
+
+/// The plan for @p radii with finest voxel @p h0 and the two precisions.
+/// @throw InvalidInputError for invalid radii (validateRadii) or a non-positive h0.
+ScalePlan makeScalePlan(const std::vector<double>& radii, double h0, double volumeSpherePrecision,
+                        double patchLinePrecision);
+
 } // namespace msii

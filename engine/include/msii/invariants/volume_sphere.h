@@ -25,7 +25,7 @@
 ///    and Ŝ'' from the neighbouring radii.
 /// All radii of one level share one pass over each stencil.
 
-#include <msii/core/progress.h>
+#include <msii/core/run_context.h>
 #include <msii/levelset/levelset.h>
 #include <msii/mesh/trimesh.h>
 
@@ -39,6 +39,9 @@ struct VolumeSphereOptions {
     /// Precision knob: a radius is evaluated on the coarsest grid with r/h at least this
     /// (errors fall roughly like (h/r)^2; cost per vertex grows like its cube).
     double minVoxelsPerRadius = 6.0;
+    /// The grid level of each radius (ScalePlan::volumeSphereLevels); empty =
+    /// volumeSphereLevels(radii, level set voxel, minVoxelsPerRadius).
+    std::vector<int> levelOfRadius;
     bool computeSphere = true;       ///< also S (shares the stencil pass with V)
     /// Per-vertex distance to the nearest border (mesh/border_distance.h); empty = closed.
     /// Radius r_j of vertex i is masked (NaN) when r_j + 4 h_level + 2 h_0 > borderDistance[i].
@@ -61,6 +64,6 @@ struct VolumeSphereResult {
 /// @throw InvalidInputError if radii are empty, not ascending or not positive.
 VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& levelSet,
                                        const VolumeSphereOptions& options,
-                                       Progress* progress = nullptr);
+                                       RunContext* context = nullptr);
 
 } // namespace msii

@@ -13,8 +13,7 @@
 /// - `valid_radii` (integer): at how many radii that invariant has a value at the vertex,
 ///   N away from borders, 0 where `quality` is only a stand-in.
 
-#include <msii/invariants/patch_line.h>
-#include <msii/invariants/volume_sphere.h>
+#include <msii/core/feature_set.h>
 #include <msii/mesh/trimesh.h>
 
 #include <string>
@@ -22,32 +21,18 @@
 
 namespace msii {
 
-using FeatureColumns = std::vector<std::vector<float>>;  ///< [j][vertex], radius ascending
-
-/// The computed invariants; empty columns mean "not computed".
-struct Features {
-    const FeatureColumns* volume = nullptr;  ///< V/|B_r|
-    const FeatureColumns* sphere = nullptr;  ///< S/(4π r²)
-    const FeatureColumns* patch = nullptr;   ///< P/(π r²)
-    const FeatureColumns* line = nullptr;    ///< L/(2π r)
-};
-
-/// The features of a run: V and S from @p vs, P and L from @p pl (the results must outlive
-/// the returned pointers).
-Features featuresOf(const VolumeSphereResult& vs, const PatchLineResult& pl);
-
 /// Copies the features into properties, in the order of the file comment.
-std::vector<VertexProperty> featureProperties(const Features& features);
+std::vector<VertexProperty> featureProperties(const FeatureSet& features);
 
 /// The name of feature j (0-based) of invariant @p letter: "V_07" (two digits at least).
 std::string featureName(char letter, std::size_t j);
 
 /// The value `quality` holds at a vertex where its invariant has no value at any radius:
 /// that of a plane through the vertex (V̂ = Ŝ = 1/2, P̂ = L̂ = 1); NaN if nothing was computed.
-float qualityStandIn(const Features& features);
+float qualityStandIn(const FeatureSet& features);
 
 /// Which invariant `quality` comes from, e.g. "V_16" (its largest radius), for the
 /// documentation of outputs.
-std::string qualitySource(const Features& features);
+std::string qualitySource(const FeatureSet& features);
 
 } // namespace msii

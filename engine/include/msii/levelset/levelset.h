@@ -22,7 +22,7 @@
 /// surface and fails next to open borders and tilted open sheets); it still fills the tiles
 /// farther away.
 
-#include <msii/core/progress.h>
+#include <msii/core/run_context.h>
 #include <msii/mesh/trimesh.h>
 
 #include <memory>
@@ -55,9 +55,10 @@ public:
     /// clamped to the band half width; the sign stays meaningful.
     double signedDistance(const Vec3& world) const;
 
-    const Impl& impl() const { return *mImpl; }
-
 private:
+    /// The OpenVDB grids, for the engine's own sources (src/levelset/levelset_impl.h).
+    friend const Impl& levelSetImpl(const LevelSet& levelSet);
+
     std::unique_ptr<Impl> mImpl;
 };
 
@@ -69,6 +70,6 @@ private:
 /// @throw InvalidInputError for a non-positive voxel size, a half width below 2, an empty
 ///        mesh, or a grid that would be absurdly large (more than 2^20 voxels along an axis).
 LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options,
-                       Progress* progress = nullptr);
+                       RunContext* context = nullptr);
 
 } // namespace msii

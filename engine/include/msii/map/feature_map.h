@@ -16,7 +16,7 @@
 /// `msii:units`, `msii:view`, `msii:source`, `msii:parameters` (string), `msii:radii` (float
 /// vector; empty when unknown), and the standard `comments`.
 
-#include <msii/core/progress.h>
+#include <msii/core/run_context.h>
 #include <msii/map/map_frame.h>
 #include <msii/map/rasterize.h>
 #include <msii/mesh/trimesh.h>
@@ -57,7 +57,7 @@ struct FeatureMapInfo {
 /// IOError if the file cannot be written.
 FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, const MapFrame& frame,
                                const std::vector<VertexProperty>& properties,
-                               const FeatureMapOptions& options, Progress* progress = nullptr);
+                               const FeatureMapOptions& options, RunContext* context = nullptr);
 
 /// A feature map read back: every channel as float, and the frame from the header.
 struct FeatureMapImage {

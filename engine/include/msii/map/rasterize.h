@@ -4,7 +4,7 @@
 /// viewer) and where: triangle index and barycentric coordinates, so that any per-vertex value
 /// can be interpolated at each pixel.
 
-#include <msii/core/progress.h>
+#include <msii/core/run_context.h>
 #include <msii/map/map_frame.h>
 #include <msii/mesh/vertex_normals.h>
 #include <msii/mesh/trimesh.h>
@@ -40,7 +40,7 @@ struct PixelHits {
 /// the viewer; ties go to the lower triangle index). Both orientations count (open scans seen
 /// from behind still show). Parallel over bands of rows; the result does not depend on the
 /// thread count.
-PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, Progress* progress = nullptr);
+PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, RunContext* context = nullptr);
 
 /// Unit vertex normals (mesh/vertex_normals.h) in the map frame: x along axisU, y along
 /// axisV, z towards the viewer; zero for vertices without area.

@@ -16,6 +16,7 @@
 /// result maps back to the input's vertices by index (toInputVertices), so outputs keep the
 /// input's vertices and faces in the input's order.
 
+#include <msii/core/diagnostics.h>
 #include <msii/mesh/fill_holes.h>
 #include <msii/mesh/trimesh.h>
 
@@ -36,12 +37,6 @@ struct PrepareMeshOptions {
     double radius = 0;
 };
 
-/// One kind of change made, with its count, for warnings and the JSON record.
-struct PrepareChange {
-    std::string kind;     ///< e.g. "duplicate_faces_removed"
-    std::size_t count = 0;
-    std::string message;  ///< one sentence for the user, without the count's context lost
-};
 
 struct PrepareMeshResult {
     /// The mesh the computation runs on: the input's referenced vertices in input order,
@@ -58,7 +53,7 @@ struct PrepareMeshResult {
     /// filled. Empty if no radius was given.
     std::vector<float> filledShare;
     FillHolesResult holes;
-    std::vector<PrepareChange> changes;   ///< one per kind of change made
+    std::vector<Diagnostic> changes;      ///< one per kind of change made (core/diagnostics.h)
     std::size_t numIsolatedVertices = 0;  ///< input vertices in no face
 };
 

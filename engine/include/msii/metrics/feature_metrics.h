@@ -15,6 +15,7 @@
 ///   reference other than the flat surface.
 /// - Any NaN element (masked near a border) makes f NaN for that vertex.
 
+#include <msii/core/feature_set.h>
 #include <msii/mesh/trimesh.h>
 
 #include <cstddef>
@@ -22,12 +23,6 @@
 #include <vector>
 
 namespace msii {
-
-/// Which invariant a block of feature elements holds; sets its flat value and weights.
-enum class Invariant { Volume, Sphere, Patch, Line };
-
-/// 'V', 'S', 'P', 'L'.
-char invariantLetter(Invariant invariant);
 
 /// n consecutive feature elements of one invariant, radius ascending.
 struct FeatureBlock {

@@ -22,7 +22,7 @@
 /// a zero-length edge at p0 are left out. Border vertices use the triangles they have (the
 /// equations as they are, BorderMode::OpenRing) or keep their value (BorderMode::Keep).
 
-#include <msii/core/progress.h>
+#include <msii/core/run_context.h>
 #include <msii/mesh/trimesh.h>
 
 #include <cstddef>
@@ -88,7 +88,7 @@ public:
 
     /// Smooths @p values (one per vertex) in place, options().iterations times.
     /// @throw InvalidInputError if the size is not the vertex count.
-    void smooth(std::vector<float>& values, Progress* progress = nullptr) const;
+    void smooth(std::vector<float>& values, RunContext* context = nullptr) const;
 
 private:
     struct Impl;
@@ -97,6 +97,6 @@ private:
 
 /// One-off convenience: RingSmoother(mesh, options).smooth(values).
 SmoothingInfo smoothField(const TriMesh& mesh, std::vector<float>& values,
-                          const SmoothingOptions& options = {}, Progress* progress = nullptr);
+                          const SmoothingOptions& options = {}, RunContext* context = nullptr);
 
 } // namespace msii

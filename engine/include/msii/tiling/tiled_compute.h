@@ -8,7 +8,7 @@
 /// triangles inside the tile with its halo, so the merged result equals the untiled one bit
 /// for bit (docs/method.md, Tiling).
 
-#include <msii/core/progress.h>
+#include <msii/core/run_context.h>
 #include <msii/invariants/compute.h>
 
 #include <cstddef>
@@ -52,9 +52,9 @@ struct TileResult {
     int tile = 0;
     /// The tile's own vertices (global indices, ascending).
     std::vector<std::uint32_t> vertices;
-    /// Their values: each column of values.invariants and values.patchLine has one entry per
+    /// Their values: each feature column has one entry per
     /// vertices[i] (NaN for a vertex in no triangle); radii, levels, voxel size as the plan.
-    ComputeResult values;
+    InvariantsResult values;
 };
 using TileSink = std::function<void(const TileResult&)>;
 
@@ -63,14 +63,14 @@ using TileSink = std::function<void(const TileResult&)>;
 /// computation next to the mesh (e.g. io/write_ply.h's PlyPieceWriter writes them straight
 /// to the output). Returns the plan, timings and counts, with empty feature columns.
 /// @throw as computeTiled, and whatever @p sink throws.
-ComputeResult computeTiles(const TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
-                           const TileSink& sink, TiledComputeInfo* info = nullptr, Progress* progress = nullptr);
+InvariantsResult computeTiles(const TriMesh& mesh, const InvariantsOptions& options, const TilingOptions& tiling,
+                           const TileSink& sink, TiledComputeInfo* info = nullptr, RunContext* context = nullptr);
 
 /// Computes @p options on @p mesh tile by tile (see the file comment); the result has the
 /// same columns as computeInvariants (the exact mode is not tiled).
 /// @throw InvalidInputError as computeInvariants, and when the budget is too small for even
 /// one tile (the message says how much is needed).
-ComputeResult computeTiled(const TriMesh& mesh, const ComputeOptions& options, const TilingOptions& tiling,
-                           TiledComputeInfo* info = nullptr, Progress* progress = nullptr);
+InvariantsResult computeTiled(const TriMesh& mesh, const InvariantsOptions& options, const TilingOptions& tiling,
+                           TiledComputeInfo* info = nullptr, RunContext* context = nullptr);
 
 } // namespace msii
