@@ -51,19 +51,19 @@ struct UsageError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
-msii::Vec3 parseCenter(const std::string& text)
+msii::Vec3 parseTriple(const std::string& text, const std::string& option)
 {
     std::array<double, 3> c{};
     std::istringstream in(text);
     for (int k = 0; k < 3; ++k) {
         if (k > 0) {
             char comma = 0;
-            if (!(in >> comma) || comma != ',') throw UsageError("--center must be x,y,z (got '" + text + "')");
+            if (!(in >> comma) || comma != ',') throw UsageError(option + " must be x,y,z (got '" + text + "')");
         }
-        if (!(in >> c[std::size_t(k)])) throw UsageError("--center must be x,y,z (got '" + text + "')");
+        if (!(in >> c[std::size_t(k)])) throw UsageError(option + " must be x,y,z (got '" + text + "')");
     }
     in >> std::ws;
-    if (!in.eof()) throw UsageError("--center must be x,y,z (got '" + text + "')");
+    if (!in.eof()) throw UsageError(option + " must be x,y,z (got '" + text + "')");
     return {c[0], c[1], c[2]};
 }
 
@@ -108,6 +108,10 @@ int main(int argc, char** argv)
     app.add_option("--seed", seed, "Random seed, 0 .. 2^64-1 (default 1)")->check(digitsOnly);
     auto* optRadius = app.add_option("--radius", radius, "sphere/cavity: radius, mm (default 10)");
     auto* optCenter = app.add_option("--center", centerText, "sphere/cavity: centre x,y,z, mm (default 0,0,0)");
+    std::string offsetText;
+    auto* optOffset = app.add_option("--offset", offsetText,
+                                     "Move the mesh by x,y,z: e.g. 500000,5500000,300 puts it in UTM-like "
+                                     "coordinates, as georeferenced scans come (written in double precision)");
     auto* optCavity = app.add_flag("--cavity", cavity, "sphere: reverse the orientation (same as shape cavity)");
     auto* optSide = app.add_option("--side", side, "cube: edge length, mm (default 10)");
     auto* optWidth = app.add_option("--width", width, "plane/terrain/tablet: extent along x, mm (default 20)");
@@ -187,7 +191,7 @@ int main(int argc, char** argv)
             msii::samples::SphereOptions o;
             if (optSpacing->count()) o.spacing = spacing;
             if (optRadius->count()) o.radius = radius;
-            if (optCenter->count()) o.center = parseCenter(centerText);
+            if (optCenter->count()) o.center = parseTriple(centerText, "--center");
             o.cavity = cavity || shape == "cavity";
             o.seed = seed;
             comment << " radius " << o.radius << " spacing " << o.spacing << (o.cavity ? " cavity" : "");
@@ -224,7 +228,7 @@ int main(int argc, char** argv)
             if (o.anisotropy != 1) comment << " anisotropy " << o.anisotropy;
             if (o.densityVariation != 1) comment << " density variation " << o.densityVariation;
             if (o.roughness > 0) comment << " roughness " << o.roughness;
-            if (!o.closed && !ascii && holes == 0) {
+            if (!o.closed && !ascii && holes == 0 && optOffset->count() == 0) {
                 // Streamed: never held in memory, so any size the disk takes.
                 msii::WritePlyOptions plyOptions;
                 plyOptions.forceDoublePoints = doublePoints;
@@ -253,6 +257,11 @@ int main(int argc, char** argv)
             ho.seed = seed;
             const msii::samples::HoleReport made = msii::samples::punchHoles(mesh, ho);
             comment << " holes " << made.holes << " up to " << ho.maxSize;
+        }
+        if (optOffset->count()) {
+            const msii::Vec3 offset = parseTriple(offsetText, "--offset");
+            for (msii::Vec3& p : mesh.points) p += offset;
+            comment << " offset " << offsetText;
         }
         msii::WritePlyOptions plyOptions;
         plyOptions.binary = !ascii;

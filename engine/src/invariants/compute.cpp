@@ -92,6 +92,10 @@ InvariantsResult prepareComputation(const TriMesh& mesh, const InvariantsOptions
         throw InvalidInputError(msg.str());
     }
     result.plan = makeScalePlan(radii, h0, options.minVoxelsPerRadius, patchLinePrecision(options));
+    const double step = 1024.0 * h0;
+    const Vec3 centre = (result.stats.bboxMin + result.stats.bboxMax) * 0.5;
+    result.plan.origin = {std::round(centre.x / step) * step, std::round(centre.y / step) * step,
+                          std::round(centre.z / step) * step};
     if (radii.front() < result.stats.medianEdge) {
         std::ostringstream msg;
         msg << "the smallest radius (" << radii.front() << ") is below the median edge length ("
@@ -228,12 +232,32 @@ void computeFastValues(const TriMesh& mesh, const InvariantsOptions& options, co
     }
 }
 
+void computeLocalValues(const TriMesh& mesh, const InvariantsOptions& options, InvariantsResult& result,
+                        RunContext* context);
+
 /// The values of @p result (checked, with its plan) on one piece of mesh.
 void computeValues(const TriMesh& mesh, const InvariantsOptions& options, InvariantsResult& result,
                    RunContext* context)
 {
     const Stopwatch total;
     result.features.radii = result.plan.radii;
+    // The local frame (ScalePlan::origin): a moved copy where the origin is not zero.
+    TriMesh moved;
+    if (const Vec3 o = result.plan.origin; o.x != 0 || o.y != 0 || o.z != 0) {
+        moved.triangles = mesh.triangles;
+        moved.points.resize(mesh.numVertices());
+        for (std::size_t i = 0; i < moved.points.size(); ++i) moved.points[i] = mesh.points[i] - o;
+        computeLocalValues(moved, options, result, context);
+    } else {
+        computeLocalValues(mesh, options, result, context);
+    }
+    result.cost.total = result.cost.check + total.seconds();
+}
+
+/// computeValues on the mesh in the local frame.
+void computeLocalValues(const TriMesh& mesh, const InvariantsOptions& options, InvariantsResult& result,
+                        RunContext* context)
+{
     // Values are masked where their reach meets a border; distances are searched a little
     // beyond it (docs/method.md, Borders).
     std::vector<double> border;
@@ -249,7 +273,6 @@ void computeValues(const TriMesh& mesh, const InvariantsOptions& options, Invari
         if (std::optional<Diagnostic> d = mostlyMasked(result.plan.radii, masked, mesh.numVertices()))
             result.diagnostics.push_back(std::move(*d));
     }
-    result.cost.total = result.cost.check + total.seconds();
 }
 
 } // namespace

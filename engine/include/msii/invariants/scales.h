@@ -2,6 +2,8 @@
 /// @file scales.h
 /// @brief The nested radii of MSII (paper §3, Eq. 3 and 5): r_j = j·R/N, j = 1..N.
 
+#include <msii/core/vec3.h>
+
 #include <vector>
 
 namespace msii {
@@ -53,6 +55,13 @@ struct ScalePlan {
     /// How far from a vertex its values may depend on the mesh (dependenceReach at the
     /// smaller precision, whose coarser levels reach farther).
     double reach = 0;
+    /// The computation's local frame: every stage sees the mesh moved by −origin, so that
+    /// georeferenced meshes (UTM: x ≈ 500 000 m, y ≈ 5 500 000 m) compute as meshes at the
+    /// origin do. It is the whole mesh's bounding-box centre rounded to a multiple of
+    /// 1024 h0, so the voxel grid keeps its place relative to the mesh, and every tile
+    /// takes the whole mesh's (docs/method.md, Local frame). Outputs keep the input's
+    /// coordinates.
+    Vec3 origin;
     int numVolumeSphereLevels() const;
 };
 
