@@ -1,0 +1,76 @@
+#pragma once
+/// @file compute_args.h
+/// @brief `msii compute`'s arguments and the pieces its two files share:
+/// compute_command.cpp (the options and one input's run) and compute_collection.cpp
+/// (folders and several inputs: skipping, resuming, the manifest).
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace msii::tools {
+
+struct ComputeArgs {
+    std::vector<std::string> inputs;
+    std::string output, outputDir;
+    double radius = 0;
+    int scales = 16;
+    double voxelSize = 0;
+    double precision = 6.0;
+    double plPrecision = 0;  // 0 = 4/3 of precision (the engine's default)
+    std::string propertyPrefix;  // --property-names
+    int threads = 0;
+    bool quiet = false, overwrite = false, repair = false, strict = false, noSphere = false;
+    double fillHoles = -1;      // longest hole border filled; -1 = pi R (default), 0 = none
+    std::string invariants = "V,S,P,L";
+    bool exact = false;
+    std::string vertices;       // exact mode: comma-separated indices
+    std::size_t randomVertices = 0;
+    std::uint64_t seed = 1;
+    bool gigamesh = false;
+    std::string memoryBudget;   // e.g. "8G": tiles sized to fit
+    int tiles = 0;              // tiles per axis (0: from the budget)
+    int tile = -1;              // compute only this tile (with --tiles), for merging later
+    std::string manifest;       // JSON lines; default for collections: <output folder>/msii-manifest.jsonl
+    bool recursive = false;     // folders: also their subfolders
+};
+
+/// What one input gave, for the summary and the manifest.
+struct OneResult {
+    std::size_t vertices = 0;
+    double voxelSize = 0, seconds = 0;
+};
+
+struct Selection {
+    bool volume = false, sphere = false, patch = false, line = false;
+};
+
+/// The P and L precision the engine uses for these arguments (0 = its automatic choice).
+double plPrecisionOf(const ComputeArgs& args);
+
+/// "V,S,P,L" (any order, case, subset) to a selection; --no-sphere removes S.
+Selection parseInvariants(const ComputeArgs& args);
+
+/// Where the result of @p input goes: --output for a single input, else
+/// <output-dir or input's folder>/<stem>.msii.ply
+std::string outputPathFor(const ComputeArgs& args, const std::string& input);
+
+/// The JSON record next to an output PLY.
+std::string sidecarPathFor(const std::string& plyPath);
+
+/// One input: read, prepare, compute, write the PLY (and GigaMesh files) and its JSON record.
+/// @throw InvalidInputError, IOError with one sentence.
+OneResult computeOne(const ComputeArgs& args, const std::string& input, const std::string& output);
+
+/// The inputs with folders replaced by the mesh files in them (sorted; subfolders with
+/// --recursive); @p collection is set when there are several or a folder was given.
+/// @throw InvalidInputError for a folder without mesh files.
+std::vector<std::string> expandInputs(const ComputeArgs& args, bool& collection);
+
+/// A collection: each input on its own; a failure is reported and the rest go on; finished
+/// outputs made with the same parameters are skipped unless --overwrite, so an interrupted
+/// run resumes; one manifest line per input. Returns the exit code (1 if any failed).
+int computeCollection(const ComputeArgs& args, const std::vector<std::string>& inputs);
+
+} // namespace msii::tools
