@@ -425,6 +425,282 @@ void removeSmoothingBias(VolumeSphereResult& result, double h0)
     });
 }
 
+/// Step 1 and 2 of the file comment: occupancy on the fine level from the level set, and the
+/// pyramid of coarser levels; tiles within reach of any vertex's stencil get their side.
+std::vector<FloatTree::Ptr> occupancyPyramid(const LevelSet& levelSet, const LevelPlan& plan,
+                                             const std::vector<double>& radii,
+                                             const std::vector<openvdb::Vec3d>& globalIndex, const Coord& shiftCoord,
+                                             RunContext* progress)
+{
+    const openvdb::FloatGrid& sdf = *levelSetImpl(levelSet).grid;
+    const double h0 = sdf.voxelSize()[0];
+    const int numLevels = int(plan.radiiOf.size());
+    if (progress) progress->start("occupancy", std::size_t(numLevels));
+    // Tiles within reach of any vertex's stencil get their side from the band on the fine
+    // level (blocks of 8 fine voxels), and coarse tiles copy the fine side: coarse blocks
+    // are 2^l times larger, too coarse to tell sides apart near an open border.
+    openvdb::CoordBBox vertexBox;
+    for (const auto& u : globalIndex) vertexBox.expand(Coord::floor(u) - shiftCoord);
+    int finePad = 0;
+    for (int l = 0; l < numLevels; ++l) {
+        double rhoMax = 0;
+        for (int j : plan.radiiOf[l]) rhoMax = std::max(rhoMax, radii[j] / (h0 * (1 << l)));
+        finePad = std::max(finePad, (int(std::ceil(rhoMax)) + 12) << l);
+    }
+    openvdb::CoordBBox fineBox = vertexBox;
+    fineBox.expand(finePad);
+    std::vector<FloatTree::Ptr> occupancy{occupancyFromDistance(sdf)};
+    detail::fillTileSides(*occupancy.back(), fineBox, 0.5f, -0.5f,
+                          levelSetImpl(levelSet).guessedSide.get());
+    if (progress) progress->advance();
+    for (int l = 1; l < numLevels; ++l) {
+        occupancy.push_back(restrictOccupancy(*occupancy.back()));
+        copyTileSides(*occupancy.back(), *occupancy.front(), l, fineBox);
+        if (progress) progress->advance();
+    }
+    if (progress) progress->end();
+    return occupancy;
+}
+
+/// The voxel centres of one level that the vertices need: the 8 corners of the level's cell
+/// around each vertex, numbered in a tree (value: the node's number), with each vertex's
+/// cell corner and position inside the cell.
+struct LevelNodes {
+    std::vector<Coord> base;                 ///< per vertex: the cell's lowest corner
+    std::vector<std::array<float, 3>> frac;  ///< per vertex: position in the cell, 0..1
+    Int32Tree nodes{-1};                     ///< node number per needed voxel centre
+    std::vector<std::int32_t> seedVertex;    ///< per node: a vertex next to it
+    std::int32_t numNodes = 0;
+};
+
+LevelNodes levelNodes(const std::vector<openvdb::Vec3d>& globalIndex, int level, const Coord& shiftCoord)
+{
+    const std::size_t nv = globalIndex.size();
+    LevelNodes ln;
+    std::vector<Coord>& base = ln.base;
+    std::vector<std::array<float, 3>>& frac = ln.frac;
+    Int32Tree& nodes = ln.nodes;
+    std::vector<std::int32_t>& seedVertex = ln.seedVertex;
+    std::int32_t& numNodes = ln.numNodes;
+    // Voxel centres needed: the 8 corners of the level's cell around each vertex.
+    const double scale = double(1 << level), shift = 0.5 * (scale - 1.0);
+    base.resize(nv);
+    frac.resize(nv);
+    const Coord levelShift(shiftCoord.x() >> level, shiftCoord.y() >> level, shiftCoord.z() >> level);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            const openvdb::Vec3d u = (globalIndex[i] - openvdb::Vec3d(shift)) / scale;
+            const Coord b(int(std::floor(u.x())), int(std::floor(u.y())), int(std::floor(u.z())));
+            base[i] = b - levelShift;
+            frac[i] = {float(u.x() - b.x()), float(u.y() - b.y()), float(u.z() - b.z())};
+        }
+    });
+    {
+        openvdb::tree::ValueAccessor<Int32Tree> acc(nodes);
+        for (std::size_t i = 0; i < nv; ++i)
+            for (int c = 0; c < 8; ++c)  // value: a vertex next to the voxel centre
+                acc.setValueOn(base[i].offsetBy(c & 1, (c >> 1) & 1, c >> 2), std::int32_t(i));
+    }
+    std::vector<Int32Tree::LeafNodeType*> blocks;
+    nodes.getNodes(blocks);
+    for (auto* leaf : blocks)
+        for (auto it = leaf->beginValueOn(); it; ++it) {
+            seedVertex.push_back(it.getValue());
+            it.setValue(numNodes++);
+        }
+    return ln;
+}
+
+/// Values of the level's nodes (voxel centres), normalised by the stencils' sums, with
+/// each node's signed distance for the surface correction.
+struct NodeValues {
+    std::vector<float> volume, sphere;  ///< [node · radii + k]
+    std::vector<float> phi;             ///< [node]
+};
+
+/// Step 3 of the file comment: the stencil sums at every node of @p ln, block by block.
+NodeValues stencilSums(LevelNodes& ln, const FloatTree& occ, const Stencil& stencil, const LevelSet& levelSet,
+                       int level, const Coord& shiftCoord, bool sphere, RunContext* progress)
+{
+    const int nr = stencil.numRadii;
+    // Stencil sums at every needed voxel centre, block by block: the block's occupancy
+    // is copied densely with the axis along which its nodes fill the fewest rows as the
+    // fastest one, and the stencil is applied row by row.
+    const std::int32_t numNodes = ln.numNodes;
+    NodeValues out;
+    std::vector<float>& nodeV = out.volume;
+    std::vector<float>& nodeS = out.sphere;
+    std::vector<float>& nodePhi = out.phi;
+    nodeV.resize(std::size_t(numNodes) * nr);
+    nodeS.resize(sphere ? std::size_t(numNodes) * nr : 0);
+    nodePhi.resize(std::size_t(numNodes));
+    const openvdb::FloatGrid& sdf = *levelSetImpl(levelSet).grid;
+    const double h0 = sdf.voxelSize()[0];
+    std::vector<Int32Tree::LeafNodeType*> blocks;
+    ln.nodes.getNodes(blocks);
+    const std::vector<std::int32_t>& seedVertex = ln.seedVertex;
+    const int side = stencil.side;
+    const std::size_t denseSize = std::size_t(side) * side * side;
+    struct Scratch {
+        std::vector<float> zyx, buffer;
+        std::vector<float> groupSum, sumV, sumS;  // kRow floats per group / radius
+    };
+    tbb::enumerable_thread_specific<Scratch> scratch([&] {
+        return Scratch{std::vector<float>(denseSize), std::vector<float>(denseSize),
+                       std::vector<float>(stencil.numGroups() * kRow),
+                       std::vector<float>(nr * kRow), std::vector<float>(nr * kRow)};
+    });
+    if (progress) progress->start("V and S, level " + std::to_string(level), blocks.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 4), [&](const auto& r) {
+        Scratch& sc = scratch.local();
+        openvdb::tree::ValueAccessor<const FloatTree> sdfAcc(sdf.tree());
+        for (std::size_t b = r.begin(); b < r.end(); ++b) {
+            const Int32Tree::LeafNodeType& leaf = *blocks[b];
+            // Rows needed along each axis.
+            std::array<std::uint64_t, 3> rowMask{0, 0, 0};
+            for (auto it = leaf.cbeginValueOn(); it; ++it) {
+                const Coord c = it.getCoord() - leaf.origin();
+                rowMask[0] |= std::uint64_t(1) << (c.y() * 8 + c.z());
+                rowMask[1] |= std::uint64_t(1) << (c.x() * 8 + c.z());
+                rowMask[2] |= std::uint64_t(1) << (c.x() * 8 + c.y());
+            }
+            int axis = 2;
+            for (int a = 0; a < 2; ++a)
+                if (__builtin_popcountll(rowMask[a]) < __builtin_popcountll(rowMask[axis])) axis = a;
+
+            const Coord lo = leaf.origin().offsetBy(-stencil.reach);
+            const CoordBBox box(lo, lo.offsetBy(side - 1));
+            openvdb::tools::Dense<float, openvdb::tools::LayoutZYX> dense(box, sc.zyx.data());
+            openvdb::tools::copyToDense(occ, dense, /*serial=*/true);
+            // Occupancy = 1/2 − q, laid out with `axis` fastest (z: in place).
+            const std::size_t s2 = std::size_t(side) * side;
+            float* occupancyBlock = sc.zyx.data();
+            if (axis == 2) {
+                for (float& v : sc.zyx) v = 0.5f - v;
+            } else {
+                for (std::size_t x = 0; x < std::size_t(side); ++x)
+                    for (std::size_t y = 0; y < std::size_t(side); ++y)
+                        for (std::size_t z = 0; z < std::size_t(side); ++z)
+                            sc.buffer[axis == 1 ? x * s2 + z * side + y : y * s2 + z * side + x] =
+                                0.5f - sc.zyx[x * s2 + y * side + z];
+                occupancyBlock = sc.buffer.data();
+            }
+
+            const auto& offsets = stencil.offsets[axis];
+            for (int u = 0; u < 8; ++u)
+                for (int v = 0; v < 8; ++v) {
+                    if (!((rowMask[axis] >> (u * 8 + v)) & 1)) continue;
+                    // The row's first node in the dense block (slow, middle, fast axes).
+                    const std::size_t start =
+                        (std::size_t(u + stencil.reach) * side + std::size_t(v + stencil.reach)) *
+                            side + std::size_t(stencil.reach);
+                    applyStencil(stencil, offsets, occupancyBlock + start, sc.groupSum.data(),
+                                 sc.sumV.data(), sphere ? sc.sumS.data() : nullptr);
+                    for (int t = 0; t < kRow; ++t) {
+                        const Coord local = axis == 2 ? Coord(u, v, t)
+                                          : axis == 1 ? Coord(u, t, v)
+                                                      : Coord(t, u, v);
+                        const Coord ijk = leaf.origin() + local;
+                        if (!leaf.isValueOn(ijk)) continue;
+                        const std::size_t n = std::size_t(leaf.getValue(ijk));
+                        for (int j = 0; j < nr; ++j) {
+                            nodeV[n * nr + j] = float(sc.sumV[j * kRow + t] / stencil.sumV[j]);
+                            if (sphere)
+                                nodeS[n * nr + j] = float(sc.sumS[j * kRow + t] / stencil.sumS[j]);
+                        }
+                        // Signed distance of the voxel centre, for the surface correction:
+                        // on the fine level straight from the (exact) band, on coarser
+                        // ones from the mesh.
+                        if (level == 0) {
+                            nodePhi[n] = sdfAcc.getValue(ijk);
+                        } else {
+                            const openvdb::Vec3d w =
+                                (fineIndexOf(ijk, level) + openvdb::Vec3d(shiftCoord.asVec3d())) * h0;
+                            nodePhi[n] = float(levelSetImpl(levelSet).distance->exactSignedDistance(
+                                Vec3(w.x(), w.y(), w.z()), std::uint32_t(seedVertex[n]), 4.0 * h0));
+                        }
+                    }
+                }
+            if (progress) progress->advance();
+        }
+    });
+    if (progress) progress->end();
+    return out;
+}
+
+/// Step 4 of the file comment: back to the vertices, at the level's radii.
+void interpolateToVertices(const TriMesh& mesh, const LevelSet& levelSet, const LevelNodes& ln, const NodeValues& values,
+                           const std::vector<int>& levelRadii, const std::vector<double>& radii, int level,
+                           const VolumeSphereOptions& options, VolumeSphereResult& result)
+{
+    const std::size_t nv = mesh.numVertices();
+    const double h0 = levelSetImpl(levelSet).grid->voxelSize()[0];
+    const double hl = h0 * double(1 << level);
+    const int nr = int(levelRadii.size());
+    const bool sphere = options.computeSphere;
+    const Int32Tree& nodes = ln.nodes;
+    const std::vector<Coord>& base = ln.base;
+    const std::vector<std::array<float, 3>>& frac = ln.frac;
+    const std::vector<float>& nodeV = values.volume;
+    const std::vector<float>& nodeS = values.sphere;
+    const std::vector<float>& nodePhi = values.phi;
+    // Back to the vertices: trilinear interpolation of surface-corrected node values.
+    // A node at signed distance x·r from the surface is moved onto it with the
+    // second-order model of surfaceVolume/surfaceSphere. The node's distance is modelled as
+    // ψ = n·d + κ/2·|d_t|² (vertex normal n, offset d = node − vertex, d_t its tangential
+    // part), with κ fitted to the nodes' exact distances and capped at 0.5/r: V̂ and Ŝ are
+    // averages over a ball of radius r, so the field they form cannot bend more sharply
+    // than that, and sharp edges and corners (where the exact distance is a cone and
+    // would imply κ ≈ 1/h) must not be corrected as if they were smooth. The linear part
+    // n·d vanishes at the vertex under trilinear interpolation, so n's error matters
+    // only through the curvature term.
+    const double margin = 4.0 * hl + 2.0 * h0;
+    const auto& distance = *levelSetImpl(levelSet).distance;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
+        openvdb::tree::ValueAccessor<const Int32Tree> acc(nodes);
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            const Vec3& n = distance.vertexNormal(i);
+            std::array<std::int32_t, 8> idx;
+            std::array<double, 8> w, along, tangential2;
+            double num = 0, den = 0;
+            for (int c = 0; c < 8; ++c) {
+                const int cx = c & 1, cy = (c >> 1) & 1, cz = c >> 2;
+                idx[c] = acc.getValue(base[i].offsetBy(cx, cy, cz));
+                const double fx = cx ? frac[i][0] : 1.0 - frac[i][0];
+                const double fy = cy ? frac[i][1] : 1.0 - frac[i][1];
+                const double fz = cz ? frac[i][2] : 1.0 - frac[i][2];
+                w[c] = fx * fy * fz;
+                const Vec3 d(hl * (cx - frac[i][0]), hl * (cy - frac[i][1]),
+                             hl * (cz - frac[i][2]));
+                along[c] = dot(n, d);
+                tangential2[c] = std::max(0.0, dot(d, d) - along[c] * along[c]);
+                const double deviation = nodePhi[std::size_t(idx[c])] - along[c];
+                num += deviation * tangential2[c];
+                den += tangential2[c] * tangential2[c];
+            }
+            const double kappaFit = den > 0 ? 2.0 * num / den : 0.0;
+            for (int k = 0; k < nr; ++k) {
+                const int j = levelRadii[k];
+                if (!options.borderDistance.empty() &&
+                    radii[j] + margin > options.borderDistance[i])
+                    continue;  // stays NaN: the ball reaches the border
+                const double kappa = std::clamp(kappaFit, -0.5 / radii[j], 0.5 / radii[j]);
+                const double a = kappa * radii[j];
+                double v = 0, s = 0;
+                for (int c = 0; c < 8; ++c) {
+                    const std::size_t m = std::size_t(idx[c]);
+                    const double psi = along[c] + 0.5 * kappa * tangential2[c];
+                    const double x = std::clamp(psi / radii[j], -0.6, 0.6);
+                    v += w[c] * surfaceVolume(nodeV[m * nr + k], x, a);
+                    if (sphere) s += w[c] * surfaceSphere(nodeS[m * nr + k], x, a);
+                }
+                result.volume[j][i] = float(std::clamp(v, 0.0, 1.0));
+                if (sphere) result.sphere[j][i] = float(std::clamp(s, 0.0, 1.0));
+            }
+        }
+    });
+}
+
 } // namespace
 
 VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& levelSet,
@@ -438,8 +714,7 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
     if (!options.borderDistance.empty() && options.borderDistance.size() != nv)
         throw InvalidInputError("border distances do not match the vertex count");
 
-    const openvdb::FloatGrid& sdf = *levelSetImpl(levelSet).grid;
-    const double h0 = sdf.voxelSize()[0];
+    const double h0 = levelSetImpl(levelSet).grid->voxelSize()[0];
     const LevelPlan plan = planLevels(options.levelOfRadius.empty()
                                           ? volumeSphereLevels(radii, h0, options.minVoxelsPerRadius)
                                           : options.levelOfRadius,
@@ -468,225 +743,26 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
     });
 
     Stopwatch stage;
-    if (progress) progress->start("occupancy", std::size_t(numLevels));
-    // Tiles within reach of any vertex's stencil get their side from the band on the fine
-    // level (blocks of 8 fine voxels), and coarse tiles copy the fine side: coarse blocks
-    // are 2^l times larger, too coarse to tell sides apart near an open border.
-    openvdb::CoordBBox vertexBox;
-    for (const auto& u : globalIndex) vertexBox.expand(Coord::floor(u) - shiftCoord);
-    int finePad = 0;
-    for (int l = 0; l < numLevels; ++l) {
-        double rhoMax = 0;
-        for (int j : plan.radiiOf[l]) rhoMax = std::max(rhoMax, radii[j] / (h0 * (1 << l)));
-        finePad = std::max(finePad, (int(std::ceil(rhoMax)) + 12) << l);
-    }
-    openvdb::CoordBBox fineBox = vertexBox;
-    fineBox.expand(finePad);
-    std::vector<FloatTree::Ptr> occupancy{occupancyFromDistance(sdf)};
-    detail::fillTileSides(*occupancy.back(), fineBox, 0.5f, -0.5f,
-                          levelSetImpl(levelSet).guessedSide.get());
-    if (progress) progress->advance();
-    for (int l = 1; l < numLevels; ++l) {
-        occupancy.push_back(restrictOccupancy(*occupancy.back()));
-        copyTileSides(*occupancy.back(), *occupancy.front(), l, fineBox);
-        if (progress) progress->advance();
-    }
-    if (progress) progress->end();
+    const std::vector<FloatTree::Ptr> occupancy =
+        occupancyPyramid(levelSet, plan, radii, globalIndex, shiftCoord, progress);
     result.occupancySeconds = stage.seconds();
 
     for (int level = 0; level < numLevels; ++level) {
-        const auto& levelRadii = plan.radiiOf[level];
+        const auto& levelRadii = plan.radiiOf[std::size_t(level)];
         if (levelRadii.empty()) continue;
         const double hl = h0 * double(1 << level);
         std::vector<double> rho;
-        for (int j : levelRadii) rho.push_back(radii[j] / hl);
-        const Stencil stencil = makeStencil(rho);
-        const int nr = stencil.numRadii;
+        for (int j : levelRadii) rho.push_back(radii[std::size_t(j)] / hl);
 
-        // Voxel centres needed: the 8 corners of the level's cell around each vertex.
         stage.restart();
-        const double scale = double(1 << level), shift = 0.5 * (scale - 1.0);
-        std::vector<Coord> base(nv);
-        std::vector<std::array<float, 3>> frac(nv);
-        const Coord levelShift(shiftCoord.x() >> level, shiftCoord.y() >> level, shiftCoord.z() >> level);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
-            for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                const openvdb::Vec3d u = (globalIndex[i] - openvdb::Vec3d(shift)) / scale;
-                const Coord b(int(std::floor(u.x())), int(std::floor(u.y())), int(std::floor(u.z())));
-                base[i] = b - levelShift;
-                frac[i] = {float(u.x() - b.x()), float(u.y() - b.y()), float(u.z() - b.z())};
-            }
-        });
-        Int32Tree nodes(-1);
-        {
-            openvdb::tree::ValueAccessor<Int32Tree> acc(nodes);
-            for (std::size_t i = 0; i < nv; ++i)
-                for (int c = 0; c < 8; ++c)  // value: a vertex next to the voxel centre
-                    acc.setValueOn(base[i].offsetBy(c & 1, (c >> 1) & 1, c >> 2), std::int32_t(i));
-        }
-        std::vector<Int32Tree::LeafNodeType*> blocks;
-        nodes.getNodes(blocks);
-        std::int32_t numNodes = 0;
-        std::vector<std::int32_t> seedVertex;
-        for (auto* leaf : blocks)
-            for (auto it = leaf->beginValueOn(); it; ++it) {
-                seedVertex.push_back(it.getValue());
-                it.setValue(numNodes++);
-            }
-        result.numNodes += std::size_t(numNodes);
-
-        // Stencil sums at every needed voxel centre, block by block: the block's occupancy
-        // is copied densely with the axis along which its nodes fill the fewest rows as the
-        // fastest one, and the stencil is applied row by row.
-        const bool sphere = options.computeSphere;
-        std::vector<float> nodeV(std::size_t(numNodes) * nr),
-            nodeS(sphere ? std::size_t(numNodes) * nr : 0);
-        std::vector<float> nodePhi(numNodes);
-        const FloatTree& occ = *occupancy[level];
-        const int side = stencil.side;
-        const std::size_t denseSize = std::size_t(side) * side * side;
-        struct Scratch {
-            std::vector<float> zyx, buffer;
-            std::vector<float> groupSum, sumV, sumS;  // kRow floats per group / radius
-        };
-        tbb::enumerable_thread_specific<Scratch> scratch([&] {
-            return Scratch{std::vector<float>(denseSize), std::vector<float>(denseSize),
-                           std::vector<float>(stencil.numGroups() * kRow),
-                           std::vector<float>(nr * kRow), std::vector<float>(nr * kRow)};
-        });
-        if (progress) progress->start("V and S, level " + std::to_string(level), blocks.size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 4), [&](const auto& r) {
-            Scratch& sc = scratch.local();
-            openvdb::tree::ValueAccessor<const FloatTree> sdfAcc(sdf.tree());
-            for (std::size_t b = r.begin(); b < r.end(); ++b) {
-                const Int32Tree::LeafNodeType& leaf = *blocks[b];
-                // Rows needed along each axis.
-                std::array<std::uint64_t, 3> rowMask{0, 0, 0};
-                for (auto it = leaf.cbeginValueOn(); it; ++it) {
-                    const Coord c = it.getCoord() - leaf.origin();
-                    rowMask[0] |= std::uint64_t(1) << (c.y() * 8 + c.z());
-                    rowMask[1] |= std::uint64_t(1) << (c.x() * 8 + c.z());
-                    rowMask[2] |= std::uint64_t(1) << (c.x() * 8 + c.y());
-                }
-                int axis = 2;
-                for (int a = 0; a < 2; ++a)
-                    if (__builtin_popcountll(rowMask[a]) < __builtin_popcountll(rowMask[axis])) axis = a;
-
-                const Coord lo = leaf.origin().offsetBy(-stencil.reach);
-                const CoordBBox box(lo, lo.offsetBy(side - 1));
-                openvdb::tools::Dense<float, openvdb::tools::LayoutZYX> dense(box, sc.zyx.data());
-                openvdb::tools::copyToDense(occ, dense, /*serial=*/true);
-                // Occupancy = 1/2 − q, laid out with `axis` fastest (z: in place).
-                const std::size_t s2 = std::size_t(side) * side;
-                float* occupancyBlock = sc.zyx.data();
-                if (axis == 2) {
-                    for (float& v : sc.zyx) v = 0.5f - v;
-                } else {
-                    for (std::size_t x = 0; x < std::size_t(side); ++x)
-                        for (std::size_t y = 0; y < std::size_t(side); ++y)
-                            for (std::size_t z = 0; z < std::size_t(side); ++z)
-                                sc.buffer[axis == 1 ? x * s2 + z * side + y : y * s2 + z * side + x] =
-                                    0.5f - sc.zyx[x * s2 + y * side + z];
-                    occupancyBlock = sc.buffer.data();
-                }
-
-                const auto& offsets = stencil.offsets[axis];
-                for (int u = 0; u < 8; ++u)
-                    for (int v = 0; v < 8; ++v) {
-                        if (!((rowMask[axis] >> (u * 8 + v)) & 1)) continue;
-                        // The row's first node in the dense block (slow, middle, fast axes).
-                        const std::size_t start =
-                            (std::size_t(u + stencil.reach) * side + std::size_t(v + stencil.reach)) *
-                                side + std::size_t(stencil.reach);
-                        applyStencil(stencil, offsets, occupancyBlock + start, sc.groupSum.data(),
-                                     sc.sumV.data(), sphere ? sc.sumS.data() : nullptr);
-                        for (int t = 0; t < kRow; ++t) {
-                            const Coord local = axis == 2 ? Coord(u, v, t)
-                                              : axis == 1 ? Coord(u, t, v)
-                                                          : Coord(t, u, v);
-                            const Coord ijk = leaf.origin() + local;
-                            if (!leaf.isValueOn(ijk)) continue;
-                            const std::size_t n = std::size_t(leaf.getValue(ijk));
-                            for (int j = 0; j < nr; ++j) {
-                                nodeV[n * nr + j] = float(sc.sumV[j * kRow + t] / stencil.sumV[j]);
-                                if (sphere)
-                                    nodeS[n * nr + j] = float(sc.sumS[j * kRow + t] / stencil.sumS[j]);
-                            }
-                            // Signed distance of the voxel centre, for the surface correction:
-                            // on the fine level straight from the (exact) band, on coarser
-                            // ones from the mesh.
-                            if (level == 0) {
-                                nodePhi[n] = sdfAcc.getValue(ijk);
-                            } else {
-                                const openvdb::Vec3d w =
-                                    (fineIndexOf(ijk, level) + openvdb::Vec3d(shiftCoord.asVec3d())) * h0;
-                                nodePhi[n] = float(levelSetImpl(levelSet).distance->exactSignedDistance(
-                                    Vec3(w.x(), w.y(), w.z()), std::uint32_t(seedVertex[n]), 4.0 * h0));
-                            }
-                        }
-                    }
-                if (progress) progress->advance();
-            }
-        });
-        if (progress) progress->end();
+        LevelNodes ln = levelNodes(globalIndex, level, shiftCoord);
+        result.numNodes += std::size_t(ln.numNodes);
+        const NodeValues values = stencilSums(ln, *occupancy[std::size_t(level)], makeStencil(rho), levelSet, level,
+                                              shiftCoord, options.computeSphere, progress);
         result.stencilSeconds += stage.seconds();
 
-        // Back to the vertices: trilinear interpolation of surface-corrected node values.
-        // A node at signed distance x·r from the surface is moved onto it with the
-        // second-order model of surfaceVolume/surfaceSphere. The node's distance is modelled as
-        // ψ = n·d + κ/2·|d_t|² (vertex normal n, offset d = node − vertex, d_t its tangential
-        // part), with κ fitted to the nodes' exact distances and capped at 0.5/r: V̂ and Ŝ are
-        // averages over a ball of radius r, so the field they form cannot bend more sharply
-        // than that, and sharp edges and corners (where the exact distance is a cone and
-        // would imply κ ≈ 1/h) must not be corrected as if they were smooth. The linear part
-        // n·d vanishes at the vertex under trilinear interpolation, so n's error matters
-        // only through the curvature term.
         stage.restart();
-        const double margin = 4.0 * hl + 2.0 * h0;
-        const auto& distance = *levelSetImpl(levelSet).distance;
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
-            openvdb::tree::ValueAccessor<const Int32Tree> acc(nodes);
-            for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                const Vec3& n = distance.vertexNormal(i);
-                std::array<std::int32_t, 8> idx;
-                std::array<double, 8> w, along, tangential2;
-                double num = 0, den = 0;
-                for (int c = 0; c < 8; ++c) {
-                    const int cx = c & 1, cy = (c >> 1) & 1, cz = c >> 2;
-                    idx[c] = acc.getValue(base[i].offsetBy(cx, cy, cz));
-                    const double fx = cx ? frac[i][0] : 1.0 - frac[i][0];
-                    const double fy = cy ? frac[i][1] : 1.0 - frac[i][1];
-                    const double fz = cz ? frac[i][2] : 1.0 - frac[i][2];
-                    w[c] = fx * fy * fz;
-                    const Vec3 d(hl * (cx - frac[i][0]), hl * (cy - frac[i][1]),
-                                 hl * (cz - frac[i][2]));
-                    along[c] = dot(n, d);
-                    tangential2[c] = std::max(0.0, dot(d, d) - along[c] * along[c]);
-                    const double deviation = nodePhi[std::size_t(idx[c])] - along[c];
-                    num += deviation * tangential2[c];
-                    den += tangential2[c] * tangential2[c];
-                }
-                const double kappaFit = den > 0 ? 2.0 * num / den : 0.0;
-                for (int k = 0; k < nr; ++k) {
-                    const int j = levelRadii[k];
-                    if (!options.borderDistance.empty() &&
-                        radii[j] + margin > options.borderDistance[i])
-                        continue;  // stays NaN: the ball reaches the border
-                    const double kappa = std::clamp(kappaFit, -0.5 / radii[j], 0.5 / radii[j]);
-                    const double a = kappa * radii[j];
-                    double v = 0, s = 0;
-                    for (int c = 0; c < 8; ++c) {
-                        const std::size_t m = std::size_t(idx[c]);
-                        const double psi = along[c] + 0.5 * kappa * tangential2[c];
-                        const double x = std::clamp(psi / radii[j], -0.6, 0.6);
-                        v += w[c] * surfaceVolume(nodeV[m * nr + k], x, a);
-                        if (sphere) s += w[c] * surfaceSphere(nodeS[m * nr + k], x, a);
-                    }
-                    result.volume[j][i] = float(std::clamp(v, 0.0, 1.0));
-                    if (sphere) result.sphere[j][i] = float(std::clamp(s, 0.0, 1.0));
-                }
-            }
-        });
+        interpolateToVertices(mesh, levelSet, ln, values, levelRadii, radii, level, options, result);
         result.interpolationSeconds += stage.seconds();
     }
 
