@@ -22,11 +22,12 @@ packages=(
   libfreetype-dev libfontconfig-dev fonts-dejavu-core
   pybind11-dev python3-dev python3-numpy
   libcgal-dev libeigen3-dev
+  libgdal-dev
   libcli11-dev nlohmann-json3-dev
   libgtest-dev
 )
-# The tests also run the Snakemake workflow of samples/snakemake.
-[ "$with_tests" = ON ] && packages+=(snakemake)
+# The tests also run the Snakemake workflow of samples/snakemake, and check GeoTIFFs with gdalinfo.
+[ "$with_tests" = ON ] && packages+=(snakemake gdal-bin)
 # ... and the Python module's tests and its documented example (plots with matplotlib).
 [ "$with_tests" = ON ] && packages+=(python3-pytest python3-matplotlib)
 

@@ -1121,6 +1121,43 @@ StreamedMeshCounts writeHeightFieldPly(const HeightFieldOptions& options, const 
     return {numPoints, numTriangles};
 }
 
+Dem makeDem(const DemSampleOptions& options)
+{
+    const HeightFieldOptions& f = options.surface;
+    heightFieldValue(f, 0.0, 0.0);  // validates the sizes
+    const double h = f.spacing;
+    const int cols = std::max(2, int(std::lround(f.width / h))), rows = std::max(2, int(std::lround(f.height / h)));
+    Dem dem;
+    RasterGeoreference& g = dem.georeference;
+    g.width = cols;
+    g.height = rows;
+    g.transform = {options.west, h, 0.0, options.north, 0.0, -h};
+    g.crsWkt = crsWkt(options.crs);
+    dem.heights.resize(std::size_t(cols) * std::size_t(rows));
+    // Cell (col, row)'s centre is at local (x, y) = ((col + ½) h, height − (row + ½) h): the
+    // surface of makeHeightField, with y up as in the mesh.
+    tbb::parallel_for(tbb::blocked_range<int>(0, rows), [&](const auto& r) {
+        for (int row = r.begin(); row < r.end(); ++row)
+            for (int col = 0; col < cols; ++col)
+                dem.heights[std::size_t(row) * std::size_t(cols) + std::size_t(col)] =
+                    float(options.baseHeight + heightFieldValue(f, (col + 0.5) * h, f.height - (row + 0.5) * h));
+    });
+    // Nodata patches: seeded centres and radii (one cell up to patchRadius).
+    const double largest = options.patchRadius > 0 ? options.patchRadius : 2.0 * h;
+    for (std::size_t k = 0; k < options.nodataPatches; ++k) {
+        const double cx = unitInterval(hashKey(f.seed, kStreamHoles, 2 * k)) * cols;
+        const double cy = unitInterval(hashKey(f.seed, kStreamHoles, 2 * k + 1)) * rows;
+        const double radius = (h + unitInterval(hashKey(f.seed, kStreamHoles, k, 7)) * std::max(0.0, largest - h)) / h;
+        for (int row = std::max(0, int(cy - radius - 1)); row < std::min(rows, int(cy + radius + 2)); ++row)
+            for (int col = std::max(0, int(cx - radius - 1)); col < std::min(cols, int(cx + radius + 2)); ++col)
+                if (std::hypot(col + 0.5 - cx, row + 0.5 - cy) <= radius)
+                    dem.heights[std::size_t(row) * std::size_t(cols) + std::size_t(col)] =
+                        std::numeric_limits<float>::quiet_NaN();
+    }
+    for (float v : dem.heights) dem.numValid += std::isnan(v) ? 0 : 1;
+    return dem;
+}
+
 HoleReport punchHoles(TriMesh& mesh, const HoleOptions& options)
 {
     if (!(options.minSize > 0) || !(options.maxSize >= options.minSize) || !std::isfinite(options.maxSize))

@@ -16,6 +16,7 @@
 #include <msii/core/errors.h>
 #include <msii/io/write_ply.h>
 #include <msii/samples/generators.h>
+#include <msii/terrain/raster_output.h>
 
 #include <CLI/CLI.hpp>
 
@@ -137,6 +138,14 @@ int main(int argc, char** argv)
     auto* optHoleSize = app.add_option("--hole-size", holeSize,
                                        "With --holes: largest hole radius, mm (default 2 spacings; the smallest is a "
                                        "quarter of it)");
+    bool geotiff = false;
+    std::string crs = "EPSG:25832";
+    auto* optGeotiff = app.add_flag(
+        "--geotiff", geotiff,
+        "plane/terrain/tablet: write a DEM instead of a mesh: a GeoTIFF of heights on a regular grid of "
+        "--spacing cells, in metres, its corner at --offset x,y (default 512000,5498000, UTM-like) lifted by z "
+        "(default 300), in --crs; --holes makes nodata patches up to --hole-size in radius");
+    auto* optCrs = app.add_option("--crs", crs, "With --geotiff: the coordinate system (default EPSG:25832, ETRS89 / UTM 32N)");
     app.add_flag("--ascii", ascii, "Write ascii PLY (default binary little endian)");
     app.add_flag("--double", doublePoints, "Write coordinates as double (exact) instead of float");
     app.add_flag("-q,--quiet", quiet, "Do not print the summary line");
@@ -176,12 +185,17 @@ int main(int argc, char** argv)
             {optNoise, {"terrain", "tablet"}},
             {optWedgeSize, {"tablet"}},
             {optWedgeDensity, {"tablet"}},
+            {optGeotiff, {"plane", "terrain", "tablet"}},
         };
         for (const auto& [opt, shapes] : applies)
             if (opt->count() > 0 && shapes.count(shape) == 0)
                 throw UsageError("option " + opt->get_name() + " does not apply to shape " + shape);
         if (optThickness->count() > 0 && !closed) throw UsageError("--thickness needs --closed");
         if (optWallStep->count() > 0 && !closed) throw UsageError("--wall-step needs --closed");
+        if (optCrs->count() > 0 && !geotiff) throw UsageError("--crs needs --geotiff");
+        if (geotiff && (closed || ascii || doublePoints || anisotropy != 1 || densityVariation != 1 || roughness > 0))
+            throw UsageError("--geotiff writes a regular grid: not with --closed, --ascii, --double, --anisotropy, "
+                             "--density-variation or --roughness");
         if (optHoleSize->count() > 0 && holes == 0) throw UsageError("--hole-size needs --holes");
 
         msii::TriMesh mesh;
@@ -228,6 +242,30 @@ int main(int argc, char** argv)
             if (o.anisotropy != 1) comment << " anisotropy " << o.anisotropy;
             if (o.densityVariation != 1) comment << " density variation " << o.densityVariation;
             if (o.roughness > 0) comment << " roughness " << o.roughness;
+            if (geotiff) {
+                msii::samples::DemSampleOptions d;
+                d.surface = o;
+                d.crs = crs;
+                if (optOffset->count()) {
+                    const msii::Vec3 at = parseTriple(offsetText, "--offset");
+                    d.west = at.x, d.north = at.y, d.baseHeight = at.z;
+                }
+                d.nodataPatches = holes;
+                d.patchRadius = optHoleSize->count() ? holeSize : 0;
+                const msii::Dem dem = msii::samples::makeDem(d);
+                msii::RasterOutputOptions ro;
+                ro.nodata = -9999.0;  // as DEMs often have it
+                ro.description = comment.str() + " geotiff";
+                try {
+                    msii::writeRaster(output, dem.georeference, {{"height", dem.heights}}, ro);
+                } catch (const msii::IOError& e) {
+                    return fail(1, e.what());
+                }
+                if (!quiet)
+                    std::cout << output << ": " << dem.georeference.width << " x " << dem.georeference.height
+                              << " cells, " << dem.heights.size() - dem.numValid << " nodata\n";
+                return 0;
+            }
             if (!o.closed && !ascii && holes == 0 && optOffset->count() == 0) {
                 // Streamed: never held in memory, so any size the disk takes.
                 msii::WritePlyOptions plyOptions;

@@ -4,6 +4,9 @@
 /// compute_command.cpp (the options and one input's run) and compute_collection.cpp
 /// (folders and several inputs: skipping, resuming, the manifest).
 
+#include <msii/core/diagnostics.h>
+#include <msii/invariants/compute.h>
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -34,6 +37,10 @@ struct ComputeArgs {
     int tile = -1;              // compute only this tile (with --tiles), for merging later
     std::string manifest;       // JSON lines; default for collections: <output folder>/msii-manifest.jsonl
     bool recursive = false;     // folders: also their subfolders
+    // Rasters (DEMs) in, georeferenced rasters out (compute_raster.cpp)
+    std::string rasterOutput;   // output GeoTIFF (default <stem>.msii.tif)
+    std::string bands;          // features written as bands (default V at every radius and quality)
+    int band = 0;               // the input's height band (0: the only one)
 };
 
 /// What one input gave, for the summary and the manifest.
@@ -58,6 +65,21 @@ std::string outputPathFor(const ComputeArgs& args, const std::string& input);
 
 /// The JSON record next to an output PLY.
 std::string sidecarPathFor(const std::string& plyPath);
+
+/// Whether @p input is read as a raster (DEM) rather than a mesh: not a mesh format msii
+/// reads itself (.ply, .obj, .off, .stl), and one GDAL opens as a raster.
+bool isRasterInput(const std::string& input);
+
+/// The engine's options for these arguments and selection.
+void setInvariantsOptions(const ComputeArgs& args, const Selection& sel, InvariantsOptions& options);
+
+/// A diagnostic as `msii compute` prints it: the engine's sentence, plus the option that
+/// changes what it is about.
+std::string worded(const Diagnostic& d);
+
+/// One raster input (DEM): read through GDAL, triangulate, prepare, compute, write the
+/// chosen features as a GeoTIFF on the input's grid and its JSON record (docs/terrain.md).
+OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, const std::string& output);
 
 /// One input: read, prepare, compute, write the PLY (and GigaMesh files) and its JSON record.
 /// @throw InvalidInputError, IOError with one sentence.

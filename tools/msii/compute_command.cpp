@@ -16,6 +16,7 @@
 #include <msii/mesh/mesh_stats.h>
 #include <msii/mesh/prepare_mesh.h>
 #include <msii/mesh/read_mesh.h>
+#include <msii/terrain/dem.h>
 #include <msii/tiling/tiled_compute.h>
 
 #include <nlohmann/json.hpp>
@@ -144,10 +145,12 @@ std::vector<std::string> gigameshPaths(const ComputeArgs& args, const std::strin
 
 std::string outputPathFor(const ComputeArgs& args, const std::string& input)
 {
+    const bool raster = isRasterInput(input);
+    if (raster && !args.rasterOutput.empty()) return args.rasterOutput;
     if (!args.output.empty()) return args.output;
     const fs::path in(input);
     const fs::path dir = args.outputDir.empty() ? in.parent_path() : fs::path(args.outputDir);
-    return (dir / (in.stem().string() + ".msii.ply")).string();
+    return (dir / (in.stem().string() + (raster ? ".msii.tif" : ".msii.ply"))).string();
 }
 
 std::string sidecarPathFor(const std::string& plyPath)
@@ -177,16 +180,6 @@ std::string radiusHint(const std::string& input)
     }
 }
 
-/// A diagnostic as `msii compute` prints it: the engine's sentence, plus the option that
-/// changes what it is about.
-std::string worded(const Diagnostic& d)
-{
-    if (d.kind == "mostly_masked") return d.message + " (--radius; --fill-holes fills larger holes)";
-    if (d.kind == "smallest_radius_below_edge") return d.message + " (raise --radius or lower --scales)";
-    if (d.kind == "holes_filled") return d.message + " (--fill-holes sets the largest hole filled; 0 fills none)";
-    return d.message;
-}
-
 /// "8G", "500M", "8GB", "2.5e9" (bytes) to bytes; empty = 0 (no limit).
 double parseBytes(const std::string& text)
 {
@@ -209,8 +202,39 @@ double parseBytes(const std::string& text)
 
 } // namespace
 
+std::string worded(const Diagnostic& d)
+{
+    if (d.kind == "mostly_masked") return d.message + " (--radius; --fill-holes fills larger holes)";
+    if (d.kind == "smallest_radius_below_edge") return d.message + " (raise --radius or lower --scales)";
+    if (d.kind == "holes_filled") return d.message + " (--fill-holes sets the largest hole filled; 0 fills none)";
+    return d.message;
+}
+
+void setInvariantsOptions(const ComputeArgs& args, const Selection& sel, InvariantsOptions& options)
+{
+    options.radius = args.radius;
+    options.scales = args.scales;
+    options.voxelSize = args.voxelSize;
+    options.minVoxelsPerRadius = args.precision;
+    options.patchLinePrecision = args.plPrecision;
+    options.computeVolume = sel.volume;
+    options.computeSphere = sel.sphere;
+    options.computePatch = sel.patch;
+    options.computeLine = sel.line;
+    options.exact = args.exact;
+}
+
+bool isRasterInput(const std::string& input)
+{
+    std::string ext = fs::path(input).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext == ".ply" || ext == ".obj" || ext == ".off" || ext == ".stl") return false;
+    return fs::is_regular_file(input) && isRasterFile(input);
+}
+
 OneResult computeOne(const ComputeArgs& args, const std::string& input, const std::string& output)
 {
+    if (isRasterInput(input)) return computeRasterOne(args, input, output);
     const Stopwatch total;
     const std::string sidecar = sidecarPathFor(output);
     const Selection sel = parseInvariants(args);
@@ -255,16 +279,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     const std::vector<float>& filledShare = prepared.filledShare;  // radius given: one per vertex
 
     InvariantsOptions options;
-    options.radius = args.radius;
-    options.scales = args.scales;
-    options.voxelSize = args.voxelSize;
-    options.minVoxelsPerRadius = args.precision;
-    options.patchLinePrecision = args.plPrecision;
-    options.computeVolume = sel.volume;
-    options.computeSphere = sel.sphere;
-    options.computePatch = sel.patch;
-    options.computeLine = sel.line;
-    options.exact = args.exact;
+    setInvariantsOptions(args, sel, options);
     if (args.exact) {
         // Input vertex numbers to the prepared mesh's.
         for (std::uint32_t v : exactVertices(args, read.mesh.numVertices())) {
@@ -580,6 +595,16 @@ std::function<int()> addComputeCommand(CLI::App& app)
     cmd->add_option("--tile", args->tile,
                     "With --tiles K: compute only tile I (0 to K*K-1), e.g. one cluster job per tile; "
                     "msii merge joins the parts");
+    cmd->add_option("--raster-output", args->rasterOutput,
+                    "Raster (DEM) inputs: the output GeoTIFF (default <input stem>.msii.tif): a Cloud-Optimized "
+                    "GeoTIFF on the input's grid, one float32 band per feature")
+        ->group("Terrain (DEM rasters)");
+    cmd->add_option("--bands", args->bands,
+                    "Raster inputs: the features written as bands, comma-separated, e.g. quality,V_04,V_16,S_16 "
+                    "(default: V at every radius and quality)")
+        ->group("Terrain (DEM rasters)");
+    cmd->add_option("--band", args->band, "Raster inputs: the height band of a multi-band raster (1, 2, ...)")
+        ->group("Terrain (DEM rasters)");
     cmd->add_option("--output-dir", args->outputDir,
                     "Folder for the outputs <name>.msii.ply (default: next to each input)");
     cmd->add_option("--voxel-size", args->voxelSize,

@@ -37,6 +37,7 @@
 
 #include <msii/io/write_ply.h>
 #include <msii/mesh/trimesh.h>
+#include <msii/terrain/dem.h>
 
 #include <cstdint>
 #include <string>
@@ -156,6 +157,21 @@ StreamedMeshCounts writeHeightFieldPly(const HeightFieldOptions& options, const 
 ///       kept for the last four option sets per thread, so point-by-point evaluation is cheap.
 /// @throw InvalidInputError for the same invalid sizes as makeHeightField.
 double heightFieldValue(const HeightFieldOptions& options, double x, double y);
+
+/// A generated DEM (digital elevation model): the height field of `surface` sampled at the
+/// centres of a regular grid of cells `surface.spacing` apart (the grid covers surface.width
+/// × surface.height), lifted by baseHeight, with its north-west corner at (west, north) in
+/// the coordinate system `crs`, rows running south, and `nodataPatches` seeded round patches
+/// of nodata (NaN) of radius up to patchRadius (at least a cell).
+struct DemSampleOptions {
+    HeightFieldOptions surface;
+    double west = 512000.0, north = 5498000.0, baseHeight = 300.0;  ///< UTM-like, metres
+    std::string crs = "EPSG:25832";                                 ///< ETRS89 / UTM zone 32N
+    std::size_t nodataPatches = 0;
+    double patchRadius = 0;  ///< 0 = 2 cells
+};
+/// @throw InvalidInputError for invalid sizes (as makeHeightField) or an unknown crs.
+Dem makeDem(const DemSampleOptions& options);
 
 /// Scanner-like holes: removes the faces around @p count seeded vertices, each hole reaching
 /// a seeded radius in [minSize, maxSize] from its centre vertex (at least the faces around the

@@ -1,0 +1,73 @@
+#pragma once
+/// @file dem.h
+/// @brief Digital elevation models (DEMs): single-band height rasters read through GDAL
+/// (GeoTIFF, ESRI ASCII grid, VRT mosaics and whatever else GDAL reads), as a triangle
+/// mesh the computation takes, and per-cell results written back as georeferenced rasters
+/// (terrain/raster_output.h). GDAL stays behind this header (docs/terrain.md).
+
+#include <msii/mesh/trimesh.h>
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace msii {
+
+/// Where a raster's cells are and what its heights mean: what a result raster copies from
+/// its input.
+struct RasterGeoreference {
+    int width = 0, height = 0;  ///< cells (columns, rows)
+    /// GDAL's affine geotransform: cell (col, row)'s corner is at
+    /// x = t[0] + col·t[1] + row·t[2], y = t[3] + col·t[4] + row·t[5].
+    std::array<double, 6> transform{0, 1, 0, 0, 0, -1};
+    std::string crsWkt;       ///< the coordinate system, as WKT
+    std::string crsName;      ///< e.g. "ETRS89 / UTM zone 32N"
+    std::string epsg;         ///< e.g. "25832", empty if none is known
+    std::string units;        ///< the coordinate system's linear unit, e.g. "metre"
+};
+
+struct DemReadOptions {
+    int band = 0;  ///< 1-based band to read; 0 = the only band (several are an error)
+};
+
+struct Dem {
+    RasterGeoreference georeference;
+    std::vector<float> heights;  ///< row-major, row 0 at the top; NaN where nodata
+    std::size_t numValid = 0;    ///< cells with a height
+    int band = 1;                ///< the band read
+    int bandsInFile = 1;
+};
+
+/// Reads a height raster.
+/// @throw IOError if GDAL cannot open or read the file; InvalidInputError, with one
+/// sentence, if it has no coordinate system, a geographic one (degrees: the sentence names
+/// `gdalwarp -t_srs` as the fix), several bands without options.band, a band that does not
+/// exist, a rotated geotransform, or no cell with a height.
+Dem readDem(const std::string& path, const DemReadOptions& options = {});
+
+/// A coordinate system as WKT, from anything GDAL understands ("EPSG:25832", a WKT or
+/// PROJ string). @throw InvalidInputError if GDAL does not.
+std::string crsWkt(const std::string& definition);
+
+/// True if GDAL can open @p path as a raster (not a mesh format msii reads itself).
+bool isRasterFile(const std::string& path);
+
+/// A DEM as a triangle mesh: a vertex at each cell centre with a height (z = height), two
+/// triangles per square of four such centres, split along the same diagonal everywhere, and
+/// oriented so that their normals point up (+z): the solid is the ground below. Squares with
+/// a nodata corner are left out, so nodata cells become holes (mesh preparation fills the
+/// small ones; the large ones and the raster's edge are borders).
+struct DemMesh {
+    TriMesh mesh;
+    /// Per cell (row-major), its vertex, or kNoVertex for nodata cells.
+    std::vector<std::uint32_t> vertexOfCell;
+    static constexpr std::uint32_t kNoVertex = std::numeric_limits<std::uint32_t>::max();
+};
+DemMesh demToMesh(const Dem& dem);
+
+/// A per-vertex column of a DemMesh back on the raster's cells (NaN for nodata cells).
+std::vector<float> toCells(const DemMesh& dm, const std::vector<float>& perVertex);
+
+} // namespace msii

@@ -1,0 +1,43 @@
+#pragma once
+/// @file raster_output.h
+/// @brief Per-cell results as a georeferenced raster: a Cloud-Optimized GeoTIFF on the
+/// input's grid (same geotransform and coordinate system), one float32 band per feature with
+/// its name as the band description, NaN as nodata, tiled, compressed, with overviews, so
+/// that QGIS opens and places it directly. Written to a temporary name and renamed.
+
+#include <msii/terrain/dem.h>
+
+#include <string>
+#include <vector>
+
+namespace msii {
+
+struct RasterBand {
+    std::string name;           ///< band description, e.g. "V_16"
+    std::vector<float> values;  ///< row-major, one per cell; NaN = nodata
+};
+
+struct RasterOutputOptions {
+    double nodata = std::numeric_limits<double>::quiet_NaN();  ///< the nodata value written
+    std::string description;     ///< dataset metadata (TIFFTAG_IMAGEDESCRIPTION)
+    std::vector<std::pair<std::string, std::string>> metadata;  ///< further key=value metadata
+};
+
+/// Writes @p bands on @p grid's grid to @p path as a COG (DEFLATE, 512-cell tiles,
+/// overviews).
+/// @throw InvalidInputError if a band's size is not width × height or there is no band;
+/// IOError if the file cannot be written.
+void writeRaster(const std::string& path, const RasterGeoreference& grid, const std::vector<RasterBand>& bands,
+                 const RasterOutputOptions& options = {});
+
+/// A raster read back: its grid and every band (float), with the band descriptions as names.
+struct RasterImage {
+    RasterGeoreference georeference;
+    std::vector<RasterBand> bands;
+    bool hasNodata = false;
+    double nodata = 0;
+};
+/// @throw IOError if GDAL cannot read it.
+RasterImage readRaster(const std::string& path);
+
+} // namespace msii

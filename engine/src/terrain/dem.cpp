@@ -1,0 +1,167 @@
+#include <msii/terrain/dem.h>
+
+#include "gdal_support.h"
+
+#include <msii/core/errors.h>
+
+#include <cpl_error.h>
+#include <ogr_spatialref.h>
+
+#include <cmath>
+#include <filesystem>
+#include <mutex>
+
+namespace msii {
+
+namespace detail {
+
+void initGdal()
+{
+    static std::once_flag once;
+    std::call_once(once, [] {
+        GDALAllRegister();
+        CPLSetErrorHandler(CPLQuietErrorHandler);
+    });
+}
+
+std::string lastGdalError(const std::string& otherwise)
+{
+    const char* msg = CPLGetLastErrorMsg();
+    return msg && *msg ? std::string(msg) : otherwise;
+}
+
+} // namespace detail
+
+namespace {
+
+std::string fileName(const std::string& path) { return std::filesystem::path(path).filename().string(); }
+
+} // namespace
+
+std::string crsWkt(const std::string& definition)
+{
+    detail::initGdal();
+    OGRSpatialReference srs;
+    char* wkt = nullptr;
+    if (srs.SetFromUserInput(definition.c_str()) != OGRERR_NONE || srs.exportToWkt(&wkt) != OGRERR_NONE || !wkt)
+        throw InvalidInputError("'" + definition + "' is not a coordinate system GDAL knows (e.g. EPSG:25832)");
+    std::string out(wkt);
+    CPLFree(wkt);
+    return out;
+}
+
+bool isRasterFile(const std::string& path)
+{
+    detail::initGdal();
+    CPLErrorReset();
+    detail::GdalDataset ds(GDALDataset::FromHandle(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY,
+                                                              nullptr, nullptr, nullptr)));
+    return ds != nullptr && ds->GetRasterCount() > 0;
+}
+
+Dem readDem(const std::string& path, const DemReadOptions& options)
+{
+    detail::initGdal();
+    CPLErrorReset();
+    if (!std::filesystem::exists(path)) throw IOError("cannot open '" + path + "': no such file");
+    detail::GdalDataset ds(GDALDataset::FromHandle(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY,
+                                                              nullptr, nullptr, nullptr)));
+    if (!ds) throw IOError("cannot read '" + path + "' as a raster: " + detail::lastGdalError("not a format GDAL reads"));
+    const std::string name = fileName(path);
+    Dem dem;
+    dem.bandsInFile = ds->GetRasterCount();
+    if (dem.bandsInFile < 1) throw InvalidInputError(name + " has no raster band");
+    if (options.band == 0 && dem.bandsInFile > 1)
+        throw InvalidInputError(name + " has " + std::to_string(dem.bandsInFile) +
+                                " bands; choose the height band (1 to " + std::to_string(dem.bandsInFile) + ")");
+    dem.band = options.band == 0 ? 1 : options.band;
+    if (dem.band < 1 || dem.band > dem.bandsInFile)
+        throw InvalidInputError(name + " has no band " + std::to_string(dem.band) + " (it has " +
+                                std::to_string(dem.bandsInFile) + ")");
+
+    RasterGeoreference& g = dem.georeference;
+    g.width = ds->GetRasterXSize();
+    g.height = ds->GetRasterYSize();
+    if (ds->GetGeoTransform(g.transform.data()) != CE_None)
+        throw InvalidInputError(name + " has no georeferencing (no geotransform): msii needs the cells' positions");
+    const OGRSpatialReference* srs = ds->GetSpatialRef();
+    if (!srs || srs->IsEmpty())
+        throw InvalidInputError(name + " has no coordinate system; assign it first, e.g. gdal_edit.py -a_srs EPSG:25832 " +
+                                name);
+    if (srs->IsGeographic())
+        throw InvalidInputError(name + " is in geographic coordinates (degrees), whose cells are not square on the "
+                                       "ground; reproject it to a projected system first, e.g. gdalwarp -t_srs "
+                                       "EPSG:25832 " + name + " projected.tif");
+    char* wkt = nullptr;
+    if (srs->exportToWkt(&wkt) == OGRERR_NONE && wkt) g.crsWkt = wkt;
+    CPLFree(wkt);
+    if (const char* n = srs->GetName()) g.crsName = n;
+    if (const char* code = srs->GetAuthorityCode(nullptr)) g.epsg = code;
+    const char* unit = nullptr;
+    srs->GetLinearUnits(&unit);
+    if (unit) g.units = unit;
+    const double det = g.transform[1] * g.transform[5] - g.transform[2] * g.transform[4];
+    if (!(std::abs(det) > 0) || !std::isfinite(det)) throw InvalidInputError(name + " has a degenerate geotransform");
+
+    GDALRasterBand* band = ds->GetRasterBand(dem.band);
+    dem.heights.resize(std::size_t(g.width) * std::size_t(g.height));
+    if (band->RasterIO(GF_Read, 0, 0, g.width, g.height, dem.heights.data(), g.width, g.height, GDT_Float32, 0, 0,
+                       nullptr) != CE_None)
+        throw IOError("cannot read the heights of '" + path + "': " + detail::lastGdalError("read error"));
+    int hasNodata = 0;
+    const double nodata = band->GetNoDataValue(&hasNodata);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float nodataF = float(nodata);
+    for (float& h : dem.heights) {
+        if (!std::isfinite(h) || (hasNodata && h == nodataF)) h = nan;
+        else ++dem.numValid;
+    }
+    if (dem.numValid == 0) throw InvalidInputError(name + " has no cell with a height (all nodata)");
+    return dem;
+}
+
+DemMesh demToMesh(const Dem& dem)
+{
+    const RasterGeoreference& g = dem.georeference;
+    const std::array<double, 6>& t = g.transform;
+    const std::size_t w = std::size_t(g.width), h = std::size_t(g.height);
+    DemMesh dm;
+    dm.vertexOfCell.assign(w * h, DemMesh::kNoVertex);
+    dm.mesh.points.reserve(dem.numValid);
+    for (std::size_t row = 0; row < h; ++row)
+        for (std::size_t col = 0; col < w; ++col) {
+            const float z = dem.heights[row * w + col];
+            if (std::isnan(z)) continue;
+            const double c = double(col) + 0.5, r = double(row) + 0.5;
+            dm.vertexOfCell[row * w + col] = std::uint32_t(dm.mesh.points.size());
+            dm.mesh.points.push_back({t[0] + c * t[1] + r * t[2], t[3] + c * t[4] + r * t[5], double(z)});
+        }
+    // (a, c, b) in (col, row) order turns clockwise seen from +row × +col; in the world its
+    // normal points up when the geotransform flips orientation (north-up rasters: rows go
+    // south, det < 0), so the winding follows the determinant's sign.
+    const bool flip = t[1] * t[5] - t[2] * t[4] > 0;
+    const auto add = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+        dm.mesh.triangles.push_back(flip ? Triangle{a, b, c} : Triangle{a, c, b});
+    };
+    for (std::size_t row = 0; row + 1 < h; ++row)
+        for (std::size_t col = 0; col + 1 < w; ++col) {
+            const std::uint32_t a = dm.vertexOfCell[row * w + col], b = dm.vertexOfCell[row * w + col + 1],
+                                c = dm.vertexOfCell[(row + 1) * w + col], d = dm.vertexOfCell[(row + 1) * w + col + 1];
+            if (a == DemMesh::kNoVertex || b == DemMesh::kNoVertex || c == DemMesh::kNoVertex ||
+                d == DemMesh::kNoVertex)
+                continue;
+            add(a, b, c);  // the diagonal b–c in every square
+            add(b, d, c);
+        }
+    return dm;
+}
+
+std::vector<float> toCells(const DemMesh& dm, const std::vector<float>& perVertex)
+{
+    std::vector<float> cells(dm.vertexOfCell.size(), std::numeric_limits<float>::quiet_NaN());
+    for (std::size_t k = 0; k < cells.size(); ++k)
+        if (dm.vertexOfCell[k] != DemMesh::kNoVertex) cells[k] = perVertex[dm.vertexOfCell[k]];
+    return cells;
+}
+
+} // namespace msii

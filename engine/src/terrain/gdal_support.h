@@ -1,0 +1,24 @@
+#pragma once
+/// @file gdal_support.h
+/// @brief What the engine's GDAL sources share: registration once, GDAL's own messages kept
+/// off stderr (they become the engine's one-sentence errors), datasets closed by RAII.
+
+#include <gdal_priv.h>
+
+#include <memory>
+#include <string>
+
+namespace msii::detail {
+
+/// Registers GDAL's drivers once and sends GDAL's messages to CPLGetLastErrorMsg() only.
+void initGdal();
+
+struct GdalClose {
+    void operator()(GDALDataset* ds) const { GDALClose(GDALDataset::ToHandle(ds)); }
+};
+using GdalDataset = std::unique_ptr<GDALDataset, GdalClose>;
+
+/// GDAL's last error message, or @p otherwise if it has none.
+std::string lastGdalError(const std::string& otherwise);
+
+} // namespace msii::detail

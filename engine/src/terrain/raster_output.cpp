@@ -1,0 +1,107 @@
+#include <msii/terrain/raster_output.h>
+
+#include "gdal_support.h"
+
+#include <msii/core/errors.h>
+#include <msii/io/atomic_file.h>
+
+#include <cpl_string.h>
+#include <ogr_spatialref.h>
+
+#include <cmath>
+
+namespace msii {
+
+void writeRaster(const std::string& path, const RasterGeoreference& grid, const std::vector<RasterBand>& bands,
+                 const RasterOutputOptions& options)
+{
+    detail::initGdal();
+    if (bands.empty()) throw InvalidInputError("no band to write");
+    const std::size_t cells = std::size_t(grid.width) * std::size_t(grid.height);
+    for (const RasterBand& b : bands)
+        if (b.values.size() != cells)
+            throw InvalidInputError("band '" + b.name + "' has " + std::to_string(b.values.size()) +
+                                    " values for a grid of " + std::to_string(cells) + " cells");
+    GDALDriver* mem = GetGDALDriverManager()->GetDriverByName("MEM");
+    GDALDriver* cog = GetGDALDriverManager()->GetDriverByName("COG");
+    if (!mem || !cog) throw IOError("GDAL lacks its MEM or COG driver");
+    CPLErrorReset();
+    detail::GdalDataset staged(mem->Create("", grid.width, grid.height, int(bands.size()), GDT_Float32, nullptr));
+    if (!staged) throw IOError("cannot stage the raster in memory: " + detail::lastGdalError("out of memory?"));
+    std::array<double, 6> transform = grid.transform;
+    staged->SetGeoTransform(transform.data());
+    if (!grid.crsWkt.empty()) staged->SetProjection(grid.crsWkt.c_str());
+    if (!options.description.empty()) staged->SetMetadataItem("TIFFTAG_IMAGEDESCRIPTION", options.description.c_str());
+    for (const auto& [key, value] : options.metadata) staged->SetMetadataItem(key.c_str(), value.c_str());
+    for (std::size_t k = 0; k < bands.size(); ++k) {
+        GDALRasterBand* band = staged->GetRasterBand(int(k) + 1);
+        band->SetDescription(bands[k].name.c_str());
+        band->SetNoDataValue(options.nodata);
+        std::vector<float> values;
+        const std::vector<float>* from = &bands[k].values;
+        if (!std::isnan(options.nodata)) {  // NaN stands for nodata in the values
+            values = bands[k].values;
+            for (float& v : values)
+                if (std::isnan(v)) v = float(options.nodata);
+            from = &values;
+        }
+        if (band->RasterIO(GF_Write, 0, 0, grid.width, grid.height, const_cast<float*>(from->data()), grid.width,
+                           grid.height, GDT_Float32, 0, 0, nullptr) != CE_None)
+            throw IOError("cannot stage band '" + bands[k].name + "': " + detail::lastGdalError("write error"));
+    }
+    // Cloud-Optimized GeoTIFF: 512-cell tiles, DEFLATE with the floating-point predictor,
+    // overviews down to a tile (AUTO), all cores.
+    AtomicFile file(path);
+    CPLStringList cogOptions;
+    cogOptions.SetNameValue("COMPRESS", "DEFLATE");
+    cogOptions.SetNameValue("PREDICTOR", "FLOATING_POINT");
+    cogOptions.SetNameValue("BLOCKSIZE", "512");
+    cogOptions.SetNameValue("OVERVIEWS", "AUTO");
+    cogOptions.SetNameValue("NUM_THREADS", "ALL_CPUS");
+    cogOptions.SetNameValue("BIGTIFF", "IF_SAFER");
+    detail::GdalDataset written(
+        cog->CreateCopy(file.temporaryPath().c_str(), staged.get(), FALSE, cogOptions.List(), nullptr, nullptr));
+    if (!written) throw IOError("cannot write '" + path + "': " + detail::lastGdalError("write error"));
+    written.reset();  // closes (flushes) the file before it is renamed
+    file.commit();
+}
+
+RasterImage readRaster(const std::string& path)
+{
+    detail::initGdal();
+    CPLErrorReset();
+    detail::GdalDataset ds(GDALDataset::FromHandle(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY,
+                                                              nullptr, nullptr, nullptr)));
+    if (!ds) throw IOError("cannot read '" + path + "' as a raster: " + detail::lastGdalError("not a format GDAL reads"));
+    RasterImage image;
+    RasterGeoreference& g = image.georeference;
+    g.width = ds->GetRasterXSize();
+    g.height = ds->GetRasterYSize();
+    ds->GetGeoTransform(g.transform.data());
+    if (const OGRSpatialReference* srs = ds->GetSpatialRef(); srs && !srs->IsEmpty()) {
+        char* wkt = nullptr;
+        if (srs->exportToWkt(&wkt) == OGRERR_NONE && wkt) g.crsWkt = wkt;
+        CPLFree(wkt);
+        if (const char* n = srs->GetName()) g.crsName = n;
+        if (const char* code = srs->GetAuthorityCode(nullptr)) g.epsg = code;
+        const char* unit = nullptr;
+        srs->GetLinearUnits(&unit);
+        if (unit) g.units = unit;
+    }
+    for (int k = 1; k <= ds->GetRasterCount(); ++k) {
+        GDALRasterBand* band = ds->GetRasterBand(k);
+        RasterBand b;
+        b.name = band->GetDescription();
+        b.values.resize(std::size_t(g.width) * std::size_t(g.height));
+        if (band->RasterIO(GF_Read, 0, 0, g.width, g.height, b.values.data(), g.width, g.height, GDT_Float32, 0, 0,
+                           nullptr) != CE_None)
+            throw IOError("cannot read band " + std::to_string(k) + " of '" + path + "'");
+        int has = 0;
+        const double nodata = band->GetNoDataValue(&has);
+        if (k == 1) image.hasNodata = has != 0, image.nodata = nodata;
+        image.bands.push_back(std::move(b));
+    }
+    return image;
+}
+
+} // namespace msii

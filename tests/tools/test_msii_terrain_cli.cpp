@@ -1,0 +1,200 @@
+// msii compute on DEM rasters (docs/terrain.md): georeferenced GeoTIFF out on the input's
+// grid, the same values as the mesh path, nodata as holes, and bad rasters refused cleanly.
+#include <msii/io/write_ply.h>
+#include <msii/mesh/read_mesh.h>
+#include <msii/samples/generators.h>
+#include <msii/terrain/dem.h>
+#include <msii/terrain/raster_output.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "../support/files.h"
+#include "../support/run_program.h"
+#include "../support/temp_dir.h"
+
+namespace fs = std::filesystem;
+using namespace msii;
+using msii::test::readFile;
+using msii::test::RunResult;
+using msii::test::runProgram;
+
+namespace {
+
+const fs::path& tempDir()
+{
+    static const msii::test::TempDir dir;
+    return dir.path();
+}
+
+RunResult run(const std::string& program, const std::string& args) { return runProgram(program, args, tempDir()); }
+
+/// The generated DEM of the tests: 160 × 120 cells of 0.5 m in EPSG:25832 (UTM-like
+/// coordinates), hills of a few metres, 5 nodata patches (small ones: filled).
+std::string demSample()
+{
+    static const std::string path = [] {
+        const std::string p = (tempDir() / "dem.tif").string();
+        const RunResult r = run(MSII_SAMPLES_EXE, "terrain --geotiff --width 80 --height 60 --spacing 0.5 --relief 4 "
+                                                  "--holes 5 --hole-size 1.2 -q -o '" + p + "'");
+        EXPECT_EQ(r.code, 0) << r.err;
+        return p;
+    }();
+    return path;
+}
+
+/// gdalinfo -json of @p path.
+std::string gdalinfo(const std::string& path)
+{
+    const RunResult r = run("gdalinfo", "-json '" + path + "'");
+    EXPECT_EQ(r.code, 0) << r.err;
+    return r.out;
+}
+
+void expectCleanFailure(const std::string& input, const std::string& extra, const std::string& mentions)
+{
+    SCOPED_TRACE(input + " " + extra);
+    const fs::path out = tempDir() / "bad.msii.tif";
+    fs::remove(out);
+    const RunResult r = run(MSII_EXE, "compute '" + input + "' -r 5 -n 4 " + extra + " --raster-output '" + out.string() + "'");
+    EXPECT_NE(r.code, 0);
+    EXPECT_EQ(r.err.rfind("msii: error: ", 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find(mentions), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+    EXPECT_FALSE(fs::exists(tempDir() / "bad.msii.json"));
+    for (const auto& entry : fs::directory_iterator(tempDir()))
+        EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
+}
+
+} // namespace
+
+// The output is a GeoTIFF on the input's grid: same size, geotransform and coordinate
+// system, one named band per feature, NaN as nodata (read by GDAL's own gdalinfo), and a
+// Cloud-Optimized layout with overviews.
+TEST(MsiiTerrain, GeoTiffOutIsGeoreferencedOnTheInputGrid)
+{
+    const fs::path out = tempDir() / "dem.msii.tif";
+    const RunResult r = run(MSII_EXE, "compute '" + demSample() + "' -r 5 -n 4 -q --overwrite --bands quality,V_02,V_04,S_04 "
+                                      "--raster-output '" + out.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::string info = gdalinfo(out.string());
+    EXPECT_NE(info.find("ID[\\\"EPSG\\\",25832]]"), std::string::npos) << "EPSG:25832 is named";
+    EXPECT_NE(info.find("ETRS89 / UTM zone 32N"), std::string::npos);
+    for (const char* band : {"\"description\":\"quality\"", "\"description\":\"V_02\"", "\"description\":\"V_04\"",
+                             "\"description\":\"S_04\""})
+        EXPECT_NE(info.find(band), std::string::npos) << band;
+    EXPECT_NE(info.find("\"noDataValue\":\"NaN\""), std::string::npos);
+    EXPECT_NE(info.find("\"LAYOUT\":\"COG\""), std::string::npos);
+    // Overviews come with rasters larger than a tile (512 cells).
+    const std::string large = (tempDir() / "large.tif").string();
+    RasterGeoreference g;
+    g.width = 1100, g.height = 700;
+    g.crsWkt = crsWkt("EPSG:25832");
+    writeRaster(large, g, {{"x", std::vector<float>(std::size_t(g.width) * std::size_t(g.height), 1.0f)}});
+    EXPECT_NE(gdalinfo(large).find("\"overviews\":[\n        {\n          \"size\":[\n            550"), std::string::npos)
+        << gdalinfo(large);
+
+    const RasterImage in = readRaster(demSample()), got = readRaster(out.string());
+    EXPECT_EQ(got.georeference.width, in.georeference.width);
+    EXPECT_EQ(got.georeference.height, in.georeference.height);
+    EXPECT_EQ(got.georeference.transform, in.georeference.transform);
+    EXPECT_EQ(got.georeference.epsg, "25832");
+    ASSERT_EQ(got.bands.size(), 4u);
+    EXPECT_EQ(got.bands[0].name, "quality");
+    // Nodata cells of the input are NaN in every band; cells with a height have a quality,
+    // unless they are in no triangle (no 2 × 2 block of heights around them).
+    const DemMesh dm = demToMesh(readDem(demSample()));
+    std::vector<char> inTriangle(dm.mesh.numVertices(), 0);
+    for (const Triangle& t : dm.mesh.triangles)
+        for (std::uint32_t v : t) inTriangle[v] = 1;
+    std::size_t nodata = 0;
+    for (std::size_t k = 0; k < in.bands[0].values.size(); ++k) {
+        const bool missing = in.bands[0].values[k] == float(in.nodata);
+        nodata += missing;
+        if (missing) {
+            for (const RasterBand& b : got.bands) ASSERT_TRUE(std::isnan(b.values[k])) << b.name << " cell " << k;
+        } else if (inTriangle[dm.vertexOfCell[k]]) {
+            ASSERT_FALSE(std::isnan(got.bands[0].values[k])) << "quality at cell " << k;
+        }
+    }
+    EXPECT_GT(nodata, 5u);
+    const std::string json = readFile((tempDir() / "dem.msii.json").string());
+    EXPECT_NE(json.find("\"units\": \"metre\""), std::string::npos);
+    EXPECT_NE(json.find("\"holes_filled\""), std::string::npos) << "the small nodata patches are filled";
+}
+
+// The raster path computes what the mesh path computes on the same surface: the DEM's mesh
+// (a vertex per cell centre, two triangles per square) written as a PLY and given to msii
+// compute has the same values, bit for bit.
+TEST(MsiiTerrain, EqualsTheMeshPathOnTheSameSurface)
+{
+    const fs::path raster = tempDir() / "same.msii.tif", ply = tempDir() / "same.ply", plyOut = tempDir() / "same.msii.ply";
+    const DemMesh dm = demToMesh(readDem(demSample()));
+    WritePlyOptions po;
+    po.forceDoublePoints = true;  // the same coordinates exactly
+    writePly(ply.string(), dm.mesh, {}, po);
+    RunResult r = run(MSII_EXE, "compute '" + demSample() + "' -r 5 -n 4 -q --overwrite --bands V_01,V_04,S_04,P_04,L_04 "
+                                "--raster-output '" + raster.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = run(MSII_EXE, "compute '" + ply.string() + "' -r 5 -n 4 -q --overwrite -o '" + plyOut.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const RasterImage got = readRaster(raster.string());
+    ReadMeshOptions ro;
+    ro.keepVertexProperties = true;
+    std::map<std::string, std::vector<float>> mesh;
+    for (auto& p : readMesh(plyOut.string(), ro).vertexProperties) mesh[p.name] = std::move(p.values);
+    std::size_t compared = 0;
+    for (const RasterBand& b : got.bands) {
+        ASSERT_TRUE(mesh.count(b.name)) << b.name;
+        const std::vector<float> cells = toCells(dm, mesh.at(b.name));
+        ASSERT_EQ(cells.size(), b.values.size());
+        for (std::size_t k = 0; k < cells.size(); ++k) {
+            ASSERT_TRUE(std::memcmp(&cells[k], &b.values[k], sizeof(float)) == 0)
+                << b.name << " cell " << k << ": mesh " << cells[k] << ", raster " << b.values[k];
+            compared += !std::isnan(cells[k]);
+        }
+    }
+    EXPECT_GT(compared, 5u * dm.mesh.numVertices() / 2);
+}
+
+// Rasters that cannot be computed: one error line, a non-zero exit, no output.
+TEST(MsiiTerrain, BadRastersFailCleanly)
+{
+    const Dem good = readDem(demSample());
+    const auto write = [&](const std::string& name, RasterGeoreference g, std::vector<RasterBand> bands) {
+        const std::string p = (tempDir() / name).string();
+        writeRaster(p, g, bands);
+        return p;
+    };
+    RasterGeoreference noCrs = good.georeference;
+    noCrs.crsWkt.clear();
+    expectCleanFailure(write("nocrs.tif", noCrs, {{"height", good.heights}}), "", "no coordinate system");
+
+    RasterGeoreference degrees = good.georeference;
+    degrees.crsWkt = crsWkt("EPSG:4326");
+    degrees.transform = {9.0, 1e-5, 0, 49.5, 0, -1e-5};
+    expectCleanFailure(write("degrees.tif", degrees, {{"height", good.heights}}), "", "gdalwarp -t_srs");
+
+    const std::string twoBands = write("two.tif", good.georeference, {{"height", good.heights}, {"other", good.heights}});
+    expectCleanFailure(twoBands, "", "2 bands");
+    expectCleanFailure(twoBands, "--band 3", "no band 3");
+    const fs::path chosen = tempDir() / "two.msii.tif";
+    const RunResult r = run(MSII_EXE, "compute '" + twoBands + "' -r 5 -n 4 -q --band 2 --raster-output '" + chosen.string() + "'");
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_TRUE(fs::exists(chosen));
+
+    std::vector<float> none(good.heights.size(), std::numeric_limits<float>::quiet_NaN());
+    expectCleanFailure(write("empty.tif", good.georeference, {{"height", none}}), "", "all nodata");
+
+    const std::string garbage = (tempDir() / "garbage.tif").string();
+    msii::test::writeFile(garbage, std::string(5000, 'x'));
+    expectCleanFailure(garbage, "", "garbage.tif");
+}
