@@ -198,3 +198,29 @@ TEST(MsiiTerrain, BadRastersFailCleanly)
     msii::test::writeFile(garbage, std::string(5000, 'x'));
     expectCleanFailure(garbage, "", "garbage.tif");
 }
+
+// A raster computed in windows (each with a halo) has the values of one piece, bit for bit:
+// no seams at the windows' edges, also next to nodata patches and the raster's edge.
+TEST(MsiiTerrain, WindowsEqualOnePieceWithoutSeams)
+{
+    const fs::path one = tempDir() / "one.msii.tif", windows = tempDir() / "windows.msii.tif";
+    const std::string common = " -r 5 -n 4 -q --overwrite --bands V_02,V_04,S_04,P_04,L_04,quality,filled_share ";
+    RunResult r = run(MSII_EXE, "compute '" + demSample() + "'" + common + "--raster-output '" + one.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = run(MSII_EXE, "compute '" + demSample() + "'" + common + "--window-cells 50 --raster-output '" + windows.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(readFile((tempDir() / "windows.msii.json").string()).find("\"per_row\": 4"), std::string::npos);
+    const RasterImage a = readRaster(one.string()), b = readRaster(windows.string());
+    ASSERT_EQ(a.bands.size(), b.bands.size());
+    std::size_t compared = 0, differing = 0;
+    for (std::size_t k = 0; k < a.bands.size(); ++k) {
+        ASSERT_EQ(a.bands[k].name, b.bands[k].name);
+        for (std::size_t c = 0; c < a.bands[k].values.size(); ++c) {
+            const float x = a.bands[k].values[c], y = b.bands[k].values[c];
+            differing += std::memcmp(&x, &y, sizeof(float)) != 0;
+            compared += !std::isnan(x);
+        }
+    }
+    EXPECT_EQ(differing, 0u);
+    EXPECT_GT(compared, 6u * 15000u);
+}

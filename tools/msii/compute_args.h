@@ -41,6 +41,7 @@ struct ComputeArgs {
     std::string rasterOutput;   // output GeoTIFF (default <stem>.msii.tif)
     std::string bands;          // features written as bands (default V at every radius and quality)
     int band = 0;               // the input's height band (0: the only one)
+    int windowCells = 0;        // own cells per window side (0: from the memory budget)
 };
 
 /// What one input gave, for the summary and the manifest.
@@ -69,6 +70,9 @@ std::string sidecarPathFor(const std::string& plyPath);
 /// Whether @p input is read as a raster (DEM) rather than a mesh: not a mesh format msii
 /// reads itself (.ply, .obj, .off, .stl), and one GDAL opens as a raster.
 bool isRasterInput(const std::string& input);
+
+/// "8G", "500M", "8GB", "2.5e9" (bytes) to bytes; empty = 0 (no limit).
+double parseBytes(const std::string& text);
 
 /// The engine's options for these arguments and selection.
 void setInvariantsOptions(const ComputeArgs& args, const Selection& sel, InvariantsOptions& options);

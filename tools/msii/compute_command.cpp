@@ -180,7 +180,17 @@ std::string radiusHint(const std::string& input)
     }
 }
 
-/// "8G", "500M", "8GB", "2.5e9" (bytes) to bytes; empty = 0 (no limit).
+
+} // namespace
+
+std::string worded(const Diagnostic& d)
+{
+    if (d.kind == "mostly_masked") return d.message + " (--radius; --fill-holes fills larger holes)";
+    if (d.kind == "smallest_radius_below_edge") return d.message + " (raise --radius or lower --scales)";
+    if (d.kind == "holes_filled") return d.message + " (--fill-holes sets the largest hole filled; 0 fills none)";
+    return d.message;
+}
+
 double parseBytes(const std::string& text)
 {
     if (text.empty()) return 0;
@@ -198,16 +208,6 @@ double parseBytes(const std::string& text)
     if (used == 0 || scale == 0 || !(value > 0) || !std::isfinite(value))
         throw InvalidInputError("--memory-budget '" + text + "' is not a size (use e.g. 8G or 500M)");
     return value * scale;
-}
-
-} // namespace
-
-std::string worded(const Diagnostic& d)
-{
-    if (d.kind == "mostly_masked") return d.message + " (--radius; --fill-holes fills larger holes)";
-    if (d.kind == "smallest_radius_below_edge") return d.message + " (raise --radius or lower --scales)";
-    if (d.kind == "holes_filled") return d.message + " (--fill-holes sets the largest hole filled; 0 fills none)";
-    return d.message;
 }
 
 void setInvariantsOptions(const ComputeArgs& args, const Selection& sel, InvariantsOptions& options)
@@ -604,6 +604,9 @@ std::function<int()> addComputeCommand(CLI::App& app)
                     "(default: V at every radius and quality)")
         ->group("Terrain (DEM rasters)");
     cmd->add_option("--band", args->band, "Raster inputs: the height band of a multi-band raster (1, 2, ...)")
+        ->group("Terrain (DEM rasters)");
+    cmd->add_option("--window-cells", args->windowCells,
+                    "Raster inputs: own cells per window side (default: windows sized to --memory-budget, 3G)")
         ->group("Terrain (DEM rasters)");
     cmd->add_option("--output-dir", args->outputDir,
                     "Folder for the outputs <name>.msii.ply (default: next to each input)");

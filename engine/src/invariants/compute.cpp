@@ -93,7 +93,7 @@ InvariantsResult prepareComputation(const TriMesh& mesh, const InvariantsOptions
     }
     result.plan = makeScalePlan(radii, h0, options.minVoxelsPerRadius, patchLinePrecision(options));
     const double step = 1024.0 * h0;
-    const Vec3 centre = (result.stats.bboxMin + result.stats.bboxMax) * 0.5;
+    const Vec3 centre = options.localOrigin ? *options.localOrigin : (result.stats.bboxMin + result.stats.bboxMax) * 0.5;
     result.plan.origin = {std::round(centre.x / step) * step, std::round(centre.y / step) * step,
                           std::round(centre.z / step) * step};
     if (radii.front() < result.stats.medianEdge) {

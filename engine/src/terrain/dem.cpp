@@ -59,32 +59,42 @@ bool isRasterFile(const std::string& path)
     return ds != nullptr && ds->GetRasterCount() > 0;
 }
 
-Dem readDem(const std::string& path, const DemReadOptions& options)
+struct DemSource::Impl {
+    std::string path;
+    detail::GdalDataset dataset;
+    double nodata = 0;
+    bool hasNodata = false;
+};
+
+DemSource::DemSource(const std::string& path, const DemReadOptions& options) : mImpl(std::make_unique<Impl>())
 {
+    mImpl->path = path;
+    detail::GdalDataset& mDataset = mImpl->dataset;
     detail::initGdal();
     CPLErrorReset();
     if (!std::filesystem::exists(path)) throw IOError("cannot open '" + path + "': no such file");
-    detail::GdalDataset ds(GDALDataset::FromHandle(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY,
-                                                              nullptr, nullptr, nullptr)));
-    if (!ds) throw IOError("cannot read '" + path + "' as a raster: " + detail::lastGdalError("not a format GDAL reads"));
+    mDataset.reset(GDALDataset::FromHandle(
+        GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
+    if (!mDataset)
+        throw IOError("cannot read '" + path + "' as a raster: " + detail::lastGdalError("not a format GDAL reads"));
+    GDALDataset& ds = *mDataset;
     const std::string name = fileName(path);
-    Dem dem;
-    dem.bandsInFile = ds->GetRasterCount();
-    if (dem.bandsInFile < 1) throw InvalidInputError(name + " has no raster band");
-    if (options.band == 0 && dem.bandsInFile > 1)
-        throw InvalidInputError(name + " has " + std::to_string(dem.bandsInFile) +
-                                " bands; choose the height band (1 to " + std::to_string(dem.bandsInFile) + ")");
-    dem.band = options.band == 0 ? 1 : options.band;
-    if (dem.band < 1 || dem.band > dem.bandsInFile)
-        throw InvalidInputError(name + " has no band " + std::to_string(dem.band) + " (it has " +
-                                std::to_string(dem.bandsInFile) + ")");
+    mInfo.bandsInFile = ds.GetRasterCount();
+    if (mInfo.bandsInFile < 1) throw InvalidInputError(name + " has no raster band");
+    if (options.band == 0 && mInfo.bandsInFile > 1)
+        throw InvalidInputError(name + " has " + std::to_string(mInfo.bandsInFile) +
+                                " bands; choose the height band (1 to " + std::to_string(mInfo.bandsInFile) + ")");
+    mInfo.band = options.band == 0 ? 1 : options.band;
+    if (mInfo.band < 1 || mInfo.band > mInfo.bandsInFile)
+        throw InvalidInputError(name + " has no band " + std::to_string(mInfo.band) + " (it has " +
+                                std::to_string(mInfo.bandsInFile) + ")");
 
-    RasterGeoreference& g = dem.georeference;
-    g.width = ds->GetRasterXSize();
-    g.height = ds->GetRasterYSize();
-    if (ds->GetGeoTransform(g.transform.data()) != CE_None)
+    RasterGeoreference& g = mInfo.georeference;
+    g.width = ds.GetRasterXSize();
+    g.height = ds.GetRasterYSize();
+    if (ds.GetGeoTransform(g.transform.data()) != CE_None)
         throw InvalidInputError(name + " has no georeferencing (no geotransform): msii needs the cells' positions");
-    const OGRSpatialReference* srs = ds->GetSpatialRef();
+    const OGRSpatialReference* srs = ds.GetSpatialRef();
     if (!srs || srs->IsEmpty())
         throw InvalidInputError(name + " has no coordinate system; assign it first, e.g. gdal_edit.py -a_srs EPSG:25832 " +
                                 name);
@@ -102,21 +112,49 @@ Dem readDem(const std::string& path, const DemReadOptions& options)
     if (unit) g.units = unit;
     const double det = g.transform[1] * g.transform[5] - g.transform[2] * g.transform[4];
     if (!(std::abs(det) > 0) || !std::isfinite(det)) throw InvalidInputError(name + " has a degenerate geotransform");
-
-    GDALRasterBand* band = ds->GetRasterBand(dem.band);
-    dem.heights.resize(std::size_t(g.width) * std::size_t(g.height));
-    if (band->RasterIO(GF_Read, 0, 0, g.width, g.height, dem.heights.data(), g.width, g.height, GDT_Float32, 0, 0,
-                       nullptr) != CE_None)
-        throw IOError("cannot read the heights of '" + path + "': " + detail::lastGdalError("read error"));
     int hasNodata = 0;
-    const double nodata = band->GetNoDataValue(&hasNodata);
+    mImpl->nodata = ds.GetRasterBand(mInfo.band)->GetNoDataValue(&hasNodata);
+    mImpl->hasNodata = hasNodata != 0;
+}
+
+DemSource::~DemSource() = default;
+
+Dem DemSource::read(int col0, int row0, int cols, int rows) const
+{
+    const RasterGeoreference& whole = mInfo.georeference;
+    if (col0 < 0 || row0 < 0 || cols < 1 || rows < 1 || col0 + cols > whole.width || row0 + rows > whole.height)
+        throw InvalidInputError("the window lies outside the raster");
+    Dem dem;
+    dem.band = mInfo.band;
+    dem.bandsInFile = mInfo.bandsInFile;
+    RasterGeoreference& g = dem.georeference;
+    g = whole;
+    g.width = cols;
+    g.height = rows;
+    const std::array<double, 6>& t = whole.transform;
+    g.transform[0] = t[0] + col0 * t[1] + row0 * t[2];
+    g.transform[3] = t[3] + col0 * t[4] + row0 * t[5];
+    dem.heights.resize(std::size_t(cols) * std::size_t(rows));
+    CPLErrorReset();
+    if (mImpl->dataset->GetRasterBand(mInfo.band)->RasterIO(GF_Read, col0, row0, cols, rows, dem.heights.data(), cols, rows,
+                                                      GDT_Float32, 0, 0, nullptr) != CE_None)
+ throw IOError("cannot read the heights of '" + mImpl->path + "': " + detail::lastGdalError("read error"));
     const float nan = std::numeric_limits<float>::quiet_NaN();
-    const float nodataF = float(nodata);
+    const float nodata = float(mImpl->nodata);
     for (float& h : dem.heights) {
-        if (!std::isfinite(h) || (hasNodata && h == nodataF)) h = nan;
+        if (!std::isfinite(h) || (mImpl->hasNodata && h == nodata)) h = nan;
         else ++dem.numValid;
     }
-    if (dem.numValid == 0) throw InvalidInputError(name + " has no cell with a height (all nodata)");
+    return dem;
+}
+
+Dem readDem(const std::string& path, const DemReadOptions& options)
+{
+    const DemSource source(path, options);
+    const RasterGeoreference& g = source.info().georeference;
+    Dem dem = source.read(0, 0, g.width, g.height);
+    if (dem.numValid == 0)
+        throw InvalidInputError(fileName(path) + " has no cell with a height (all nodata)");
     return dem;
 }
 

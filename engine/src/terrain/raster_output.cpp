@@ -12,6 +12,24 @@
 
 namespace msii {
 
+namespace {
+
+CPLStringList cogCreationOptions()
+{
+    // Cloud-Optimized GeoTIFF: 512-cell tiles, DEFLATE with the floating-point predictor,
+    // overviews down to a tile (AUTO), all cores.
+    CPLStringList o;
+    o.SetNameValue("COMPRESS", "DEFLATE");
+    o.SetNameValue("PREDICTOR", "FLOATING_POINT");
+    o.SetNameValue("BLOCKSIZE", "512");
+    o.SetNameValue("OVERVIEWS", "AUTO");
+    o.SetNameValue("NUM_THREADS", "ALL_CPUS");
+    o.SetNameValue("BIGTIFF", "IF_SAFER");
+    return o;
+}
+
+} // namespace
+
 void writeRaster(const std::string& path, const RasterGeoreference& grid, const std::vector<RasterBand>& bands,
                  const RasterOutputOptions& options)
 {
@@ -49,21 +67,97 @@ void writeRaster(const std::string& path, const RasterGeoreference& grid, const 
                            grid.height, GDT_Float32, 0, 0, nullptr) != CE_None)
             throw IOError("cannot stage band '" + bands[k].name + "': " + detail::lastGdalError("write error"));
     }
-    // Cloud-Optimized GeoTIFF: 512-cell tiles, DEFLATE with the floating-point predictor,
-    // overviews down to a tile (AUTO), all cores.
     AtomicFile file(path);
-    CPLStringList cogOptions;
-    cogOptions.SetNameValue("COMPRESS", "DEFLATE");
-    cogOptions.SetNameValue("PREDICTOR", "FLOATING_POINT");
-    cogOptions.SetNameValue("BLOCKSIZE", "512");
-    cogOptions.SetNameValue("OVERVIEWS", "AUTO");
-    cogOptions.SetNameValue("NUM_THREADS", "ALL_CPUS");
-    cogOptions.SetNameValue("BIGTIFF", "IF_SAFER");
+    const CPLStringList cogOptions = cogCreationOptions();
     detail::GdalDataset written(
         cog->CreateCopy(file.temporaryPath().c_str(), staged.get(), FALSE, cogOptions.List(), nullptr, nullptr));
     if (!written) throw IOError("cannot write '" + path + "': " + detail::lastGdalError("write error"));
     written.reset();  // closes (flushes) the file before it is renamed
     file.commit();
+}
+
+
+struct RasterPieceWriter::Impl {
+    std::string path;
+    RasterOutputOptions options;
+    std::unique_ptr<AtomicFile> intermediate, target;
+    detail::GdalDataset dataset;
+    int width = 0, height = 0;
+};
+
+RasterPieceWriter::RasterPieceWriter(const std::string& path, const RasterGeoreference& grid,
+                                     const std::vector<std::string>& bandNames, const RasterOutputOptions& options)
+    : mImpl(std::make_unique<Impl>())
+{
+    detail::initGdal();
+    if (bandNames.empty()) throw InvalidInputError("no band to write");
+    Impl& m = *mImpl;
+    m.path = path;
+    m.options = options;
+    m.width = grid.width;
+    m.height = grid.height;
+    GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+    if (!gtiff) throw IOError("GDAL lacks its GTiff driver");
+    // The intermediate: tiled like the COG, lightly compressed (it holds every band at once).
+    m.intermediate = std::make_unique<AtomicFile>(path + ".part.tif");
+    CPLStringList o;
+    o.SetNameValue("TILED", "YES");
+    o.SetNameValue("BLOCKXSIZE", "512");
+    o.SetNameValue("BLOCKYSIZE", "512");
+    o.SetNameValue("COMPRESS", "DEFLATE");
+    o.SetNameValue("ZLEVEL", "1");
+    o.SetNameValue("BIGTIFF", "IF_SAFER");
+    o.SetNameValue("INTERLEAVE", "BAND");
+    CPLErrorReset();
+    m.dataset.reset(gtiff->Create(m.intermediate->temporaryPath().c_str(), grid.width, grid.height,
+                                  int(bandNames.size()), GDT_Float32, o.List()));
+    if (!m.dataset) throw IOError("cannot write '" + path + "': " + detail::lastGdalError("write error"));
+    std::array<double, 6> transform = grid.transform;
+    m.dataset->SetGeoTransform(transform.data());
+    if (!grid.crsWkt.empty()) m.dataset->SetProjection(grid.crsWkt.c_str());
+    if (!options.description.empty()) m.dataset->SetMetadataItem("TIFFTAG_IMAGEDESCRIPTION", options.description.c_str());
+    for (const auto& [key, value] : options.metadata) m.dataset->SetMetadataItem(key.c_str(), value.c_str());
+    for (std::size_t k = 0; k < bandNames.size(); ++k) {
+        GDALRasterBand* band = m.dataset->GetRasterBand(int(k) + 1);
+        band->SetDescription(bandNames[k].c_str());
+        band->SetNoDataValue(options.nodata);
+    }
+}
+
+RasterPieceWriter::~RasterPieceWriter() = default;
+
+void RasterPieceWriter::write(int band, int col0, int row0, int cols, int rows, const float* values)
+{
+    Impl& m = *mImpl;
+    if (!m.dataset) throw IOError("the raster '" + m.path + "' is closed");
+    std::vector<float> copy;
+    if (!std::isnan(m.options.nodata)) {
+        copy.assign(values, values + std::size_t(cols) * std::size_t(rows));
+        for (float& v : copy)
+            if (std::isnan(v)) v = float(m.options.nodata);
+        values = copy.data();
+    }
+    if (m.dataset->GetRasterBand(band + 1)->RasterIO(GF_Write, col0, row0, cols, rows, const_cast<float*>(values), cols,
+                                                     rows, GDT_Float32, 0, 0, nullptr) != CE_None)
+        throw IOError("cannot write '" + m.path + "': " + detail::lastGdalError("write error"));
+}
+
+void RasterPieceWriter::commit()
+{
+    Impl& m = *mImpl;
+    GDALDriver* cog = GetGDALDriverManager()->GetDriverByName("COG");
+    if (!cog) throw IOError("GDAL lacks its COG driver");
+    m.dataset->FlushCache();
+    m.target = std::make_unique<AtomicFile>(m.path);
+    const CPLStringList o = cogCreationOptions();
+    CPLErrorReset();
+    detail::GdalDataset written(
+        cog->CreateCopy(m.target->temporaryPath().c_str(), m.dataset.get(), FALSE, o.List(), nullptr, nullptr));
+    if (!written) throw IOError("cannot write '" + m.path + "': " + detail::lastGdalError("write error"));
+    written.reset();
+    m.dataset.reset();
+    m.target->commit();
+    m.intermediate.reset();  // removes the intermediate file
 }
 
 RasterImage readRaster(const std::string& path)

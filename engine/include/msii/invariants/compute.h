@@ -42,6 +42,10 @@ struct InvariantsOptions {
     /// The whole mesh's median edge length, for P and L's choice of route per level
     /// (PatchLineOptions::vertexSpacing); 0 = this mesh's. Tiles get the whole mesh's.
     double vertexSpacing = 0;
+    /// Near where the local frame's origin goes (ScalePlan::origin, rounded to 1024 voxels);
+    /// unset: the mesh's bounding-box centre. Pieces of one surface computed apart (the
+    /// windows of a DEM) pass the same point, so that their values are those of one piece.
+    std::optional<Vec3> localOrigin;
     /// Tiling, for meshes larger than memory (tiling/tiled_compute.h): tiles whose
     /// computation fits in this many bytes, or tilesPerAxis × tilesPerAxis tiles; 0 and 0:
     /// one piece. The values equal those of one piece bit for bit. Not with `exact`.

@@ -10,6 +10,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,27 @@ struct Dem {
     std::size_t numValid = 0;    ///< cells with a height
     int band = 1;                ///< the band read
     int bandsInFile = 1;
+};
+
+/// A height raster opened once and read in windows (for rasters larger than memory).
+class DemSource {
+public:
+    /// Opens @p path and checks it as readDem does (except for the heights).
+    DemSource(const std::string& path, const DemReadOptions& options = {});
+    ~DemSource();
+    DemSource(const DemSource&) = delete;
+    DemSource& operator=(const DemSource&) = delete;
+
+    /// The whole raster's grid, band and band count (no heights).
+    const Dem& info() const { return mInfo; }
+    /// The cells [col0, col0 + cols) × [row0, row0 + rows) as a Dem of their own (its
+    /// geotransform moved to the window's corner). @throw IOError
+    Dem read(int col0, int row0, int cols, int rows) const;
+
+private:
+    struct Impl;  // the GDAL dataset
+    std::unique_ptr<Impl> mImpl;
+    Dem mInfo;
 };
 
 /// Reads a height raster.

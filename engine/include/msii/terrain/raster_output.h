@@ -7,6 +7,7 @@
 
 #include <msii/terrain/dem.h>
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,29 @@ struct RasterOutputOptions {
 /// IOError if the file cannot be written.
 void writeRaster(const std::string& path, const RasterGeoreference& grid, const std::vector<RasterBand>& bands,
                  const RasterOutputOptions& options = {});
+
+/// The same, filled window by window, for rasters too large to hold: the bands go to an
+/// intermediate tiled GeoTIFF next to @p path (removed afterwards, also on interruption),
+/// and commit() turns it into the COG at @p path.
+class RasterPieceWriter {
+public:
+    /// @throw IOError if the folder is not writable.
+    RasterPieceWriter(const std::string& path, const RasterGeoreference& grid, const std::vector<std::string>& bandNames,
+                      const RasterOutputOptions& options = {});
+    ~RasterPieceWriter();
+    RasterPieceWriter(const RasterPieceWriter&) = delete;
+    RasterPieceWriter& operator=(const RasterPieceWriter&) = delete;
+
+    /// Writes @p values (row-major, @p cols × @p rows, NaN = nodata) into band @p band
+    /// (0-based) at cell (col0, row0). @throw IOError
+    void write(int band, int col0, int row0, int cols, int rows, const float* values);
+    /// The COG, renamed onto the path. @throw IOError
+    void commit();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> mImpl;
+};
 
 /// A raster read back: its grid and every band (float), with the band descriptions as names.
 struct RasterImage {

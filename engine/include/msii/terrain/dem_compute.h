@@ -1,0 +1,60 @@
+#pragma once
+/// @file dem_compute.h
+/// @brief The invariants of a DEM of any size, window by window: the raster is read in
+/// windows of cells with a halo, each window is triangulated (terrain/dem.h), prepared
+/// (holes filled) and computed, and the chosen features of its own cells are written into
+/// their place in the output raster. The surface is never held whole, so memory stays at
+/// one window's computation whatever the raster's size (docs/terrain.md).
+///
+/// All windows share one plan: the voxel size and P and L's vertex spacing from the first
+/// window's mesh, and the local frame's origin at the raster's centre; the halo reaches past
+/// everything a value depends on (ScalePlan::reach), plus the widest hole that is filled,
+/// plus 4 voxels. So a window's own values are those of the whole raster computed as one
+/// piece, bit for bit (tested), and there are no seams.
+
+#include <msii/core/diagnostics.h>
+#include <msii/core/run_context.h>
+#include <msii/invariants/compute.h>
+#include <msii/terrain/dem.h>
+#include <msii/terrain/raster_output.h>
+
+#include <string>
+#include <vector>
+
+namespace msii {
+
+struct DemComputeOptions {
+    /// radius, scales, precision, which invariants (not exact, not tiled: windows are the
+    /// tiling); voxelSize 0 = from the first window's mesh.
+    InvariantsOptions invariants;
+    int band = 0;                   ///< DemReadOptions::band
+    double maxHolePerimeter = -1;   ///< nodata holes filled up to this perimeter; -1 = πR (defaultMaxHolePerimeter)
+    /// Features written, by name (featureProperties: V_01 …, quality, valid_radii, and
+    /// filled_share); empty = V at every radius (or the first invariant computed) and quality.
+    std::vector<std::string> bands;
+    /// Memory for one window's computation, bytes; windows are sized to fit it.
+    double memoryBudget = 3e9;
+    /// Own cells per window side; 0 = from memoryBudget.
+    int windowCells = 0;
+    RasterOutputOptions output;     ///< description and metadata of the output raster
+};
+
+struct DemComputeResult {
+    Dem input;                     ///< the raster's grid, band and counts (heights left empty)
+    ScalePlan plan;
+    std::vector<std::string> bands;          ///< as written
+    std::vector<Diagnostic> diagnostics;     ///< summed over the windows
+    int windowsPerRow = 1, windowsPerColumn = 1, windowCells = 0, haloCells = 0;
+    std::size_t triangles = 0;     ///< of all windows' own squares
+    std::size_t maskedValues = 0;  ///< own cells' values of the first invariant masked (NaN), all radii
+    InvariantsCost cost;           ///< summed over the windows
+    double readSeconds = 0, prepareSeconds = 0, writeSeconds = 0;
+};
+
+/// Computes the invariants of the DEM @p input and writes the chosen features to @p output,
+/// a Cloud-Optimized GeoTIFF on the input's grid (terrain/raster_output.h), atomically.
+/// @throw InvalidInputError, IOError as readDem and writeRaster, and for unusable options.
+DemComputeResult computeDem(const std::string& input, const std::string& output, const DemComputeOptions& options,
+                            RunContext* context = nullptr);
+
+} // namespace msii
