@@ -130,6 +130,8 @@ int main(int argc, char** argv)
                                        "with --closed: walls and bottom of a few long triangles, bottom outline vertices "
                                        "this far apart, mm (as many meshers make them; default: as fine as the top)");
     auto* optRelief = app.add_option("--relief", relief, "terrain: hill amplitude, mm (default 1)");
+    double hillWidth = 0;
+    auto* optHillWidth = app.add_option("--hill-width", hillWidth, "terrain: typical hill width (Gaussian sigma), mm (default 2.5)");
     auto* optNoise = app.add_option("--noise", noise, "terrain/tablet: smooth noise amplitude, mm (default 0.002)");
     auto* optWedgeSize = app.add_option("--wedge-size", wedgeSize, "tablet: mean wedge length, mm (default 1.5)");
     auto* optWedgeDensity = app.add_option("--wedge-density", wedgeDensity, "tablet: wedges per mm^2 (default 0.15)");
@@ -182,6 +184,7 @@ int main(int argc, char** argv)
             {optDensity, {"plane", "terrain", "tablet"}},
             {optRoughness, {"plane", "terrain", "tablet"}},
             {optRelief, {"terrain"}},
+            {optHillWidth, {"terrain"}},
             {optNoise, {"terrain", "tablet"}},
             {optWedgeSize, {"tablet"}},
             {optWedgeDensity, {"tablet"}},
@@ -231,6 +234,7 @@ int main(int argc, char** argv)
             o.densityVariation = densityVariation;
             o.roughness = roughness;
             if (optRelief->count()) o.relief = relief;
+            if (optHillWidth->count()) o.hillWidth = hillWidth;
             if (optNoise->count()) o.noise = noise;
             if (optWedgeSize->count()) o.wedgeSize = wedgeSize;
             if (optWedgeDensity->count()) o.wedgeDensity = wedgeDensity;

@@ -99,7 +99,10 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
     const int W = grid.width, H = grid.height;
     // The shortest step between neighbouring cell centres on the ground.
     const double cell = std::min(std::hypot(t[1], t[4]), std::hypot(t[2], t[5]));
-    const double bytesPerCell = kBytesPerTileVertex * std::max(1.0, asked.scales / 16.0);
+    // Peak bytes per cell of a window's computation at N = 16: about kBytesPerTileVertex with
+    // all four invariants, 1,150 with V and S alone (measured on 1M-cell DEMs, docs/terrain.md).
+    const double bytesPerCell = (asked.computePatch || asked.computeLine ? kBytesPerTileVertex : 1200.0) *
+                                std::max(1.0, asked.scales / 16.0);
     const double cellsPerWindow = options.memoryBudget / bytesPerCell;
     const bool oneWindow = options.windowCells == 0 ? double(W) * double(H) <= cellsPerWindow
                                                     : options.windowCells >= std::max(W, H);

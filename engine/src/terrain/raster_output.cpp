@@ -98,14 +98,13 @@ RasterPieceWriter::RasterPieceWriter(const std::string& path, const RasterGeoref
     m.height = grid.height;
     GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
     if (!gtiff) throw IOError("GDAL lacks its GTiff driver");
-    // The intermediate: tiled like the COG, lightly compressed (it holds every band at once).
+    // The intermediate: tiled like the COG, uncompressed (written once, read once by the COG
+    // driver; compressing it too costs more time than the disk does).
     m.intermediate = std::make_unique<AtomicFile>(path + ".part.tif");
     CPLStringList o;
     o.SetNameValue("TILED", "YES");
     o.SetNameValue("BLOCKXSIZE", "512");
     o.SetNameValue("BLOCKYSIZE", "512");
-    o.SetNameValue("COMPRESS", "DEFLATE");
-    o.SetNameValue("ZLEVEL", "1");
     o.SetNameValue("BIGTIFF", "IF_SAFER");
     o.SetNameValue("INTERLEAVE", "BAND");
     CPLErrorReset();
