@@ -29,7 +29,14 @@ msii="$build_dir/tools/msii"
 "$msii" render "$out/tablet.segments.ply" --show label --colormap viridis --range 0,30 --shade --pixels 800 --overwrite \
   --output "$out/tablet.segments.png"
 "$msii" outline "$out/tablet.msii.ply" --levels 0.55 --overwrite --output "$out/tablet.outline.svg"
+# Terrain: a generated DEM (GeoTIFF, UTM 32N, 0.5 m cells, small nodata patches) to a
+# georeferenced GeoTIFF of features, and its picture (docs/terrain.md).
+"$build_dir/samples/msii-samples" terrain --geotiff --width 200 --height 150 --spacing 0.5 --relief 3 \
+  --hill-width 12 --holes 8 --hole-size 1.5 --output "$out/dem.tif" -q
+"$msii" compute "$out/dem.tif" --radius 15 --overwrite --raster-output "$out/dem.msii.tif"
+"$msii" render "$out/dem.msii.tif" --shade --isolines 5 --pixels 800 --overwrite --output "$out/dem.quality.png"
 echo "msii demo: results in $out:"
 echo "  tablet.msii.ply (V_01..V_16, S_01..S_16, P_01..P_16, L_01..L_16, quality, valid_radii, filled_share),"
 echo "  tablet.msii.json,"
-echo "  tablet.map.exr (feature map), tablet.*.png (pictures), tablet.segments.ply/.csv, tablet.outline.svg"
+echo "  tablet.map.exr (feature map), tablet.*.png (pictures), tablet.segments.ply/.csv, tablet.outline.svg,"
+echo "  dem.tif (a generated DEM) and dem.msii.tif (its features as a GeoTIFF for QGIS), dem.quality.png"

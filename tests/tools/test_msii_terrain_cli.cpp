@@ -224,3 +224,46 @@ TEST(MsiiTerrain, WindowsEqualOnePieceWithoutSeams)
     EXPECT_EQ(differing, 0u);
     EXPECT_GT(compared, 6u * 15000u);
 }
+
+// A folder of adjacent DEM tiles, joined as a VRT mosaic with gdalbuildvrt, is computed as one
+// surface: its values are those of the undivided DEM, bit for bit, with no seams where the
+// tiles meet.
+TEST(MsiiTerrain, MosaicOfTilesHasNoSeams)
+{
+    const fs::path folder = tempDir() / "tiles";
+    fs::create_directories(folder);
+    const RasterImage whole = readRaster(demSample());
+    const int w = whole.georeference.width, h = whole.georeference.height;
+    std::string list;
+    for (int k = 0; k < 4; ++k) {  // 2 x 2 tiles of unequal sizes
+        const int c0 = k % 2 ? 70 : 0, r0 = k / 2 ? 45 : 0;
+        const int cols = k % 2 ? w - 70 : 70, rows = k / 2 ? h - 45 : 45;
+        const std::string tile = (folder / ("tile" + std::to_string(k) + ".tif")).string();
+        const RunResult r = run("gdal_translate", "-q -srcwin " + std::to_string(c0) + " " + std::to_string(r0) + " " +
+                                                      std::to_string(cols) + " " + std::to_string(rows) + " '" +
+                                                      demSample() + "' '" + tile + "'");
+        ASSERT_EQ(r.code, 0) << r.err;
+        list += " '" + tile + "'";
+    }
+    const std::string vrt = (tempDir() / "mosaic.vrt").string();
+    RunResult r = run("gdalbuildvrt", "-q '" + vrt + "'" + list);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const fs::path a = tempDir() / "whole.msii.tif", b = tempDir() / "mosaic.msii.tif";
+    const std::string common = " -r 5 -n 4 -q --overwrite --bands V_04,S_04,quality ";
+    r = run(MSII_EXE, "compute '" + demSample() + "'" + common + "--raster-output '" + a.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = run(MSII_EXE, "compute '" + vrt + "'" + common + "--raster-output '" + b.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const RasterImage x = readRaster(a.string()), y = readRaster(b.string());
+    EXPECT_EQ(y.georeference.transform, x.georeference.transform);
+    EXPECT_EQ(y.georeference.epsg, "25832");
+    ASSERT_EQ(x.bands.size(), y.bands.size());
+    std::size_t compared = 0;
+    for (std::size_t k = 0; k < x.bands.size(); ++k) {
+        ASSERT_EQ(x.bands[k].values.size(), y.bands[k].values.size());
+        EXPECT_EQ(std::memcmp(x.bands[k].values.data(), y.bands[k].values.data(), x.bands[k].values.size() * sizeof(float)), 0)
+            << x.bands[k].name;
+        for (float v : x.bands[k].values) compared += !std::isnan(v);
+    }
+    EXPECT_GT(compared, 2u * 15000u);
+}

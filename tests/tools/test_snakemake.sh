@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The Snakemake workflow of samples/snakemake on a folder of generated scans:
 # runs locally with --cores 2; every scan gives the same PLY as `msii compute` run directly
-# (byte for byte), a picture and a summary line; a rerun does nothing; a broken scan fails
+# (byte for byte), a picture and a summary line; a DEM gives the GeoTIFF msii compute gives; a rerun does nothing; a broken scan fails
 # its job while the others finish (--keep-going); the workflow is ready for Slurm (dry run).
 # Usage: test_snakemake.sh MSII MSII_SAMPLES SNAKEFILE
 set -euo pipefail
@@ -15,6 +15,7 @@ mkdir scans
 "$samples" tablet --width 5 --height 4 --spacing 0.1 -o scans/a.ply -q
 "$samples" terrain --width 5 --height 4 --spacing 0.1 -o scans/b.ply -q
 "$samples" sphere --radius 2 --spacing 0.15 -o scans/c.ply -q
+"$samples" terrain --geotiff --width 12 --height 10 --spacing 0.25 --relief 1 --holes 2 -o scans/e.tif -q
 run() { snakemake --snakefile "$snakefile" --cores 2 --config scans=scans results=results radius=0.6 scales=4 \
           msii="$msii" "$@"; }
 
@@ -26,7 +27,12 @@ for name in a b c; do
   "$msii" compute scans/$name.ply --radius 0.6 --scales 4 --quiet --output direct-$name.ply
   cmp -s results/$name.msii.ply direct-$name.ply || fail "$name: the workflow's PLY differs from msii compute's"
 done
-[ "$(wc -l < results/msii-summary.jsonl)" -eq 3 ] || fail "the summary should have 3 lines"
+# The DEM: a GeoTIFF of the same values as msii compute gives directly.
+[ -s results/e.msii.tif ] && [ -s results/e.msii.json ] || fail "missing the DEM's results"
+"$msii" compute scans/e.tif --radius 0.6 --scales 4 --quiet --raster-output direct-e.tif
+gdal_translate -q -of ENVI results/e.msii.tif workflow-e.raw && gdal_translate -q -of ENVI direct-e.tif direct-e.raw
+[ -s direct-e.raw ] && cmp -s workflow-e.raw direct-e.raw || fail "e: the workflow's GeoTIFF differs from msii compute's"
+[ "$(wc -l < results/msii-summary.jsonl)" -eq 4 ] || fail "the summary should have 4 lines"
 grep -q '"vertices"' results/msii-summary.jsonl || fail "the summary has no vertex counts"
 
 run > log2.txt 2>&1 || { cat log2.txt; fail "the rerun failed"; }

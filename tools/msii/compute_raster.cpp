@@ -71,7 +71,9 @@ OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, co
     options.output.description = description.str();
     std::ostringstream radii;
     for (int j = 1; j <= args.scales; ++j) radii << (j > 1 ? "," : "") << args.radius * j / args.scales;
-    options.output.metadata = {{"MSII_RADII", radii.str()}, {"MSII_VERSION", versionString()}};
+    options.output.metadata = {{"MSII_RADII", radii.str()},
+                               {"MSII_VERSION", versionString()},
+                               {"MSII_INPUT", fs::absolute(input).string()}};
 
     TerminalProgress terminal(!args.quiet && stderrIsTerminal());
     RunContext progress(terminal.listener());
@@ -104,7 +106,13 @@ OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, co
                        {"level_of_radius", result.plan.volumeSphereLevels},
                        {"sample_level_of_radius", result.plan.patchLineLevels},
                        {"reach", result.plan.reach},
-                       {"invariants", args.invariants},
+                       {"invariants", [&] {
+                            nlohmann::json list = nlohmann::json::array();
+                            for (const auto& [on, c] : {std::pair{sel.volume, "V"}, std::pair{sel.sphere, "S"},
+                                                        std::pair{sel.patch, "P"}, std::pair{sel.line, "L"}})
+                                if (on) list.push_back(c);
+                            return list;
+                        }()},
                        {"mode", "fast"},
                        {"repair", true},
                        {"max_hole_perimeter", args.fillHoles >= 0 ? args.fillHoles : defaultMaxHolePerimeter(args.radius)},

@@ -1,8 +1,10 @@
-/// `msii render INPUT`: PNG pictures of a feature PLY or an EXR feature map: false
+/// `msii render INPUT`: PNG pictures of a feature PLY, an EXR feature map or a georeferenced
+/// raster (a DEM or msii compute's GeoTIFF, one picture cell per raster cell or block): false
 /// colour of a value with isolines, shaded relief (virtual illumination), the height map of
 /// the paper's Fig. 7c, with a colour bar and a scale bar.
 #include "commands.h"
 #include "feature_input.h"
+#include "compute_args.h"
 #include "map_input.h"
 
 #include <msii/core/terminal_progress.h>
@@ -13,10 +15,12 @@
 #include <msii/render/annotate.h>
 #include <msii/render/typeface.h>
 #include <msii/render/picture.h>
+#include <msii/terrain/raster_output.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <filesystem>
 #include <memory>
 #include <sstream>
@@ -119,10 +123,149 @@ Channels channelsFromMesh(const std::string& path, const std::vector<std::string
     return c;
 }
 
+/// The unit's short name for the scale bar: "m" for GDAL's "metre", else as given.
+std::string shortUnits(const std::string& units)
+{
+    if (units == "metre" || units == "meter" || units == "Meter") return "m";
+    if (units == "foot" || units == "US survey foot" || units == "foot_us") return "ft";
+    return units;
+}
+
+/// The same channels from a georeferenced raster (a DEM, or the GeoTIFF msii compute writes
+/// for one): @p value is a band by its description; the normals, for shading, come from a
+/// band named "height" (or the only band), else from the DEM the GeoTIFF names. Rasters larger
+/// than @p pixels on their longer side are reduced by averaging blocks of cells; those at
+/// most half of it are enlarged.
+Channels channelsFromRaster(const std::string& path, const std::string& value, bool needNormals, int pixels,
+                            bool orRelief = false)
+{
+    RasterImage raster = readRaster(path);
+    const RasterGeoreference& g = raster.georeference;
+    std::vector<std::string> names;
+    for (const RasterBand& b : raster.bands) names.push_back(b.name.empty() ? "(unnamed)" : b.name);
+    const auto band = [&](const std::string& name) -> RasterBand* {
+        for (RasterBand& b : raster.bands)
+            if (b.name == name) return &b;
+        return nullptr;
+    };
+    for (RasterBand& b : raster.bands)  // nodata as NaN
+        if (raster.hasNodata && !std::isnan(raster.nodata))
+            for (float& v : b.values)
+                if (v == float(raster.nodata)) v = std::numeric_limits<float>::quiet_NaN();
+    RasterBand* heights = band("height");
+    if (!heights && raster.bands.size() == 1) heights = &raster.bands.front();
+    // msii compute's GeoTIFFs name their DEM (MSII_INPUT): its heights shade them.
+    RasterImage source;
+    if (!heights && (needNormals || orRelief))
+        for (const auto& [key, file] : raster.metadata)
+            if (key == "MSII_INPUT" && fs::exists(file)) {
+                source = readRaster(file);
+                if (source.georeference.width == g.width && source.georeference.height == g.height &&
+                    source.georeference.transform == g.transform && !source.bands.empty()) {
+                    heights = &source.bands.front();
+                    if (source.hasNodata && !std::isnan(source.nodata))
+                        for (float& v : heights->values)
+                            if (v == float(source.nodata)) v = std::numeric_limits<float>::quiet_NaN();
+                }
+            }
+    RasterBand* shown = value.empty() || value == "height" ? heights : band(value);
+    if (!value.empty() && !shown && !(orRelief && heights))
+        throw InvalidInputError("the raster has no band '" + value + "' (it has: " + available(names) + ")");
+    if ((needNormals || (orRelief && !shown)) && !heights)
+        throw InvalidInputError("shading needs heights: the raster has no band 'height' and its DEM (MSII_INPUT) is not "
+                                "where it was (msii compute --bands ...,height writes them; it has: " +
+                                available(names) + ")");
+    // Block averages, NaN-aware, to at most `pixels` on the longer side.
+    const int step = std::max(1, (std::max(g.width, g.height) + pixels - 1) / pixels);
+    const int w = (g.width + step - 1) / step, h = (g.height + step - 1) / step;
+    const auto reduce = [&](const std::vector<float>& in) {
+        std::vector<float> out(std::size_t(w) * std::size_t(h), std::numeric_limits<float>::quiet_NaN());
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                double sum = 0;
+                int n = 0;
+                for (int yy = y * step; yy < std::min(g.height, (y + 1) * step); ++yy)
+                    for (int xx = x * step; xx < std::min(g.width, (x + 1) * step); ++xx) {
+                        const float v = in[std::size_t(yy) * std::size_t(g.width) + std::size_t(xx)];
+                        if (!std::isnan(v)) sum += v, ++n;
+                    }
+                if (n > 0) out[std::size_t(y) * std::size_t(w) + std::size_t(x)] = float(sum / n);
+            }
+        return out;
+    };
+    // Rasters much smaller than `pixels` are enlarged by a whole factor, bilinearly (nearest
+    // next to nodata), so that small DEMs give pictures of a useful size.
+    const int zoom = step == 1 ? std::max(1, pixels / std::max(w, h)) : 1;
+    const int pw = w * zoom, ph = h * zoom;
+    const auto enlarge = [&](std::vector<float> in) {
+        if (zoom == 1) return in;
+        std::vector<float> out(std::size_t(pw) * std::size_t(ph));
+        const auto at = [&](int x, int y) {
+            return in[std::size_t(std::clamp(y, 0, h - 1)) * std::size_t(w) + std::size_t(std::clamp(x, 0, w - 1))];
+        };
+        for (int y = 0; y < ph; ++y)
+            for (int x = 0; x < pw; ++x) {
+                const double u = (x + 0.5) / zoom - 0.5, v = (y + 0.5) / zoom - 0.5;
+                const int x0 = int(std::floor(u)), y0 = int(std::floor(v));
+                const double fx = u - x0, fy = v - y0;
+                const float a = at(x0, y0), b = at(x0 + 1, y0), c = at(x0, y0 + 1), d = at(x0 + 1, y0 + 1);
+                float r;
+                if (std::isnan(a) || std::isnan(b) || std::isnan(c) || std::isnan(d))
+                    r = at(int(std::lround(u)), int(std::lround(v)));
+                else
+                    r = float((1 - fy) * ((1 - fx) * a + fx * b) + fy * ((1 - fx) * c + fx * d));
+                out[std::size_t(y) * std::size_t(pw) + std::size_t(x)] = r;
+            }
+        return out;
+    };
+    Channels c;
+    c.width = pw, c.height = ph;
+    const double cellX = std::hypot(g.transform[1], g.transform[4]), cellY = std::hypot(g.transform[2], g.transform[5]);
+    c.pixelSize = step * std::sqrt(cellX * cellY) / zoom;
+    c.units = g.units.empty() ? "units" : shortUnits(g.units);
+    std::vector<float> valueCells = shown ? enlarge(reduce(shown->values)) : std::vector<float>{};
+    std::vector<float>& mask = c.data["mask"];
+    const std::vector<float> heightCells = heights ? enlarge(reduce(heights->values)) : std::vector<float>{};
+    const std::vector<float>& coverage = shown ? valueCells : heightCells;
+    mask.resize(coverage.size());
+    for (std::size_t k = 0; k < mask.size(); ++k) mask[k] = std::isnan(coverage[k]) ? 0.0f : 1.0f;
+    if (shown) c.data[value.empty() ? "height" : value] = std::move(valueCells);
+    if (needNormals || (orRelief && !shown)) {
+        // Normals of the height field (x right, y up on the picture; rows run down), by central
+        // differences over the reduced cells, one-sided at edges and next to nodata.
+        std::vector<float> nx(heightCells.size()), ny(heightCells.size()), nz(heightCells.size());
+        const double dx = step * cellX / zoom, dy = step * cellY / zoom;
+        const auto at = [&](int x, int y) { return heightCells[std::size_t(y) * std::size_t(pw) + std::size_t(x)]; };
+        for (int y = 0; y < ph; ++y)
+            for (int x = 0; x < pw; ++x) {
+                const std::size_t k = std::size_t(y) * std::size_t(pw) + std::size_t(x);
+                const float z = at(x, y);
+                if (std::isnan(z)) {
+                    nx[k] = ny[k] = nz[k] = std::numeric_limits<float>::quiet_NaN();
+                    continue;
+                }
+                const auto slope = [&](int x0, int y0, int x1, int y1, double d) {
+                    const bool a = x0 >= 0 && y0 >= 0 && x0 < pw && y0 < ph && !std::isnan(at(x0, y0));
+                    const bool b = x1 >= 0 && y1 >= 0 && x1 < pw && y1 < ph && !std::isnan(at(x1, y1));
+                    if (a && b) return (at(x1, y1) - at(x0, y0)) / (2.0 * d);
+                    if (b) return (at(x1, y1) - z) / d;
+                    if (a) return (z - at(x0, y0)) / d;
+                    return 0.0;
+                };
+                const double gx = slope(x - 1, y, x + 1, y, dx), gy = -slope(x, y - 1, x, y + 1, dy);
+                const double len = std::sqrt(gx * gx + gy * gy + 1.0);
+                nx[k] = float(-gx / len), ny[k] = float(-gy / len), nz[k] = float(1.0 / len);
+            }
+        c.data["normal.x"] = std::move(nx), c.data["normal.y"] = std::move(ny), c.data["normal.z"] = std::move(nz);
+    }
+    return c;
+}
+
 int runRender(const RenderArgs& args)
 {
     const Stopwatch total;
     const bool isMap = fs::path(args.input).extension() == ".exr";
+    const bool isRaster = !isMap && isRasterInput(args.input);
     // What to show: relief (grey shading), height (Fig. 7c) or a value; default quality for
     // feature files, relief for plain meshes.
     std::string show = args.show;
@@ -162,8 +305,10 @@ int runRender(const RenderArgs& args)
     const bool automatic = show.empty();
     const std::string wanted = automatic ? "quality" : show == "relief" ? "" : show;
     const bool needNormals = show == "relief" || args.shade;
-    Channels ch = isMap ? channelsFromMap(args.input, wanted, needNormals, automatic)
-                        : channelsFromMesh(args.input, args.matFiles, args.view, wanted, needNormals, &progress, automatic);
+    Channels ch = isMap      ? channelsFromMap(args.input, wanted, needNormals, automatic)
+                  : isRaster ? channelsFromRaster(args.input, wanted, needNormals,
+                                                  args.view.pixels > 0 ? args.view.pixels : kDefaultPixels, automatic)
+                             : channelsFromMesh(args.input, args.matFiles, args.view, wanted, needNormals, &progress, automatic);
     if (automatic) show = ch.data.count("quality") ? "quality" : "relief";
     if (show == "relief") {
         if (!args.show.empty() && (args.isolines > 0 || !args.levels.empty() || !args.range.empty() ||

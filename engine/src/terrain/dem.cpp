@@ -21,6 +21,9 @@ void initGdal()
     std::call_once(once, [] {
         GDALAllRegister();
         CPLSetErrorHandler(CPLQuietErrorHandler);
+        // GDAL's block cache holds written blocks until they are flushed, by default up to
+        // 5 % of the machine's memory; a window's computation needs the memory more.
+        if (!CPLGetConfigOption("GDAL_CACHEMAX", nullptr)) GDALSetCacheMax64(GIntBig(256) << 20);
     });
 }
 

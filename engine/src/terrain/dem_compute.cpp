@@ -191,11 +191,15 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
                 std::vector<VertexProperty> props = featureProperties(r.features);
                 props.push_back({"filled_share", prepared.filledShare});
                 for (const std::string& name : result.bands) {
+                    if (name == "height") {  // the DEM's own heights
+                        cells.push_back(dem.heights);
+                        continue;
+                    }
                     const auto p = std::find_if(props.begin(), props.end(), [&](const VertexProperty& q) { return q.name == name; });
                     if (p == props.end()) {
                         std::string names;
                         for (const VertexProperty& q : props) names += (names.empty() ? "" : ", ") + q.name;
-                        throw InvalidInputError("no feature '" + name + "' to write (there are " + names + ")");
+                        throw InvalidInputError("no feature '" + name + "' to write (there are " + names + ", height)");
                     }
                     cells.push_back(toCells(dm, toInputVertices(prepared, p->values)));
                 }

@@ -181,6 +181,12 @@ RasterImage readRaster(const std::string& path)
         srs->GetLinearUnits(&unit);
         if (unit) g.units = unit;
     }
+    if (char** md = ds->GetMetadata(); md)
+        for (int k = 0; md[k]; ++k) {
+            const std::string item = md[k];
+            const std::size_t eq = item.find('=');
+            if (eq != std::string::npos) image.metadata.emplace_back(item.substr(0, eq), item.substr(eq + 1));
+        }
     for (int k = 1; k <= ds->GetRasterCount(); ++k) {
         GDALRasterBand* band = ds->GetRasterBand(k);
         RasterBand b;

@@ -30,7 +30,8 @@ struct DemComputeOptions {
     int band = 0;                   ///< DemReadOptions::band
     double maxHolePerimeter = -1;   ///< nodata holes filled up to this perimeter; -1 = πR (defaultMaxHolePerimeter)
     /// Features written, by name (featureProperties: V_01 …, quality, valid_radii, and
-    /// filled_share); empty = V at every radius (or the first invariant computed) and quality.
+    /// filled_share, and the input's `height`); empty = V at every radius (or the first
+    /// invariant computed) and quality.
     std::vector<std::string> bands;
     /// Memory for one window's computation, bytes; windows are sized to fit it.
     double memoryBudget = 3e9;

@@ -60,6 +60,7 @@ struct RasterImage {
     std::vector<RasterBand> bands;
     bool hasNodata = false;
     double nodata = 0;
+    std::vector<std::pair<std::string, std::string>> metadata;  ///< the dataset's key=value metadata
 };
 /// @throw IOError if GDAL cannot read it.
 RasterImage readRaster(const std::string& path);
