@@ -267,3 +267,44 @@ TEST(MsiiTerrain, MosaicOfTilesHasNoSeams)
     }
     EXPECT_GT(compared, 2u * 15000u);
 }
+
+// Other formats and grids: the same DEM as an ESRI ASCII grid gives the same values as the
+// GeoTIFF; a DEM with rectangular cells (0.5 × 0.75 m) computes, and its result keeps them.
+TEST(MsiiTerrain, AsciiGridsAndRectangularCells)
+{
+    const std::string asc = (tempDir() / "dem.asc").string();
+    RunResult r = run("gdal_translate", "-q -of AAIGrid '" + demSample() + "' '" + asc + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const fs::path fromTif = tempDir() / "fromtif.msii.tif", fromAsc = tempDir() / "fromasc.msii.tif";
+    const std::string common = " -r 5 -n 4 -q --overwrite --bands V_04,quality ";
+    r = run(MSII_EXE, "compute '" + demSample() + "'" + common + "--raster-output '" + fromTif.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = run(MSII_EXE, "compute '" + asc + "'" + common + "--raster-output '" + fromAsc.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const RasterImage a = readRaster(fromTif.string()), b = readRaster(fromAsc.string());
+    ASSERT_EQ(a.bands.size(), b.bands.size());
+    std::size_t finite = 0;
+    double worst = 0;
+    for (std::size_t k = 0; k < a.bands.size(); ++k)
+        for (std::size_t c = 0; c < a.bands[k].values.size(); ++c) {
+            const float x = a.bands[k].values[c], y = b.bands[k].values[c];
+            ASSERT_EQ(std::isnan(x), std::isnan(y)) << c;
+            if (!std::isnan(x)) worst = std::max(worst, double(std::abs(x - y))), ++finite;
+        }
+    EXPECT_GT(finite, 20000u);
+    // The ASCII grid stores heights as decimal text: the same surface up to that rounding.
+    EXPECT_LE(worst, 1e-3);
+
+    Dem dem = readDem(demSample());
+    dem.georeference.transform[5] = -0.75;  // rows 0.75 m apart, columns 0.5 m
+    const std::string stretched = (tempDir() / "stretched.tif").string();
+    writeRaster(stretched, dem.georeference, {{"height", dem.heights}});
+    const fs::path out = tempDir() / "stretched.msii.tif";
+    r = run(MSII_EXE, "compute '" + stretched + "' -r 5 -n 4 -q --overwrite --raster-output '" + out.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const RasterImage s = readRaster(out.string());
+    EXPECT_EQ(s.georeference.transform, dem.georeference.transform);
+    std::size_t values = 0;
+    for (float v : s.bands.back().values) values += !std::isnan(v) && v > 0.3f && v < 0.7f;
+    EXPECT_GT(values, dem.numValid * 9 / 10);  // quality of gentle terrain: near the plane's 0.5
+}

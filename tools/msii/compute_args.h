@@ -6,6 +6,11 @@
 
 #include <msii/core/diagnostics.h>
 #include <msii/invariants/compute.h>
+#include <msii/mesh/prepare_mesh.h>
+#include <msii/mesh/read_mesh.h>
+#include <msii/tiling/tiled_compute.h>
+
+#include <nlohmann/json.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -80,6 +85,28 @@ void setInvariantsOptions(const ComputeArgs& args, const Selection& sel, Invaria
 /// A diagnostic as `msii compute` prints it: the engine's sentence, plus the option that
 /// changes what it is about.
 std::string worded(const Diagnostic& d);
+
+/// What one mesh input's run gives its JSON record (compute_record.cpp).
+struct MeshRunRecord {
+    const ComputeArgs& args;
+    const std::string &input, &output;
+    const ReadMeshResult& read;
+    std::size_t inputFaces;
+    const PrepareMeshOptions& prepareOptions;
+    const PrepareMeshResult& prepared;
+    const InvariantsOptions& options;
+    const InvariantsResult& result;
+    const std::string &letters, &qualityName;  ///< e.g. "VSPL", "V_16"
+    double readSeconds, prepareSeconds, writeSeconds, totalSeconds;
+    bool tiled;
+    const TiledComputeInfo& tiledInfo;
+};
+nlohmann::json runRecord(const MeshRunRecord& record);
+
+/// This process's peak resident memory so far, bytes (0 if unknown).
+double peakMemoryBytes();
+/// Adds `diagnostics` (coded) and `warnings` (as printed) to a JSON record.
+void addDiagnostics(nlohmann::json& record, const std::vector<const std::vector<Diagnostic>*>& lists);
 
 /// One raster input (DEM): read through GDAL, triangulate, prepare, compute, write the
 /// chosen features as a GeoTIFF on the input's grid and its JSON record (docs/terrain.md).

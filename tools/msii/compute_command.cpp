@@ -392,7 +392,6 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
 
     const FeatureSet& features = result.features;
     const ScalePlan& plan = result.plan;
-    const std::size_t n = plan.radii.size();
     std::string letters;
     for (const auto& [on, c] : {std::pair{sel.volume, 'V'}, std::pair{sel.sphere, 'S'},
                                 std::pair{sel.patch, 'P'}, std::pair{sel.line, 'L'}})
@@ -434,113 +433,10 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     }
     writeSeconds += write.seconds();
 
-    nlohmann::json j;
-    j["program"] = "msii";
-    j["version"] = versionString();
-    j["command"] = "compute";
-    j["input"] = {{"path", fs::absolute(input).string()}, {"format", read.format}};
-    j["output"] = fs::absolute(output).string();
-    j["parameters"] = {{"radius", args.radius},
-                       {"scales", n},
-                       {"radii", plan.radii},
-                       {"voxel_size", plan.voxelSize},
-                       {"voxel_size_requested", args.voxelSize},
-                       {"precision_voxels_per_radius", args.precision},
-                       {"precision_patch_line", plPrecisionOf(args)},
-                       {"levels", plan.numVolumeSphereLevels()},
-                       {"level_of_radius", plan.volumeSphereLevels},
-                       {"sample_level_of_radius", plan.patchLineLevels},
-                       {"reach", plan.reach},
-                       {"band_half_width_voxels", result.cost.bandHalfWidth},
-                       {"invariants", [&] {
-                            nlohmann::json list = nlohmann::json::array();
-                            for (char c : letters) list.push_back(std::string(1, c));
-                            return list;
-                        }()},
-                       {"mode", args.exact ? "exact" : "fast"},
-                       {"exact_vertices", options.exactVertices.size()},
-                       {"repair", !args.strict},
-                       {"max_hole_perimeter", prepareOptions.maxHolePerimeter},
-                       {"threads", args.threads}};
-    j["conventions"] = {{"V", "V/|B_r| in [0,1], flat plane 0.5, convex < 0.5"},
-                        {"S", "S/(4 pi r^2) in [0,1], flat plane 0.5, convex < 0.5"},
-                        {"P", "P/(pi r^2), flat plane 1"},
-                        {"L", "L/(2 pi r), flat plane 1"},
-                        {"order", "radius ascending: V_01 = r_1 = R/N ... V_NN = R"},
-                        {"quality", qualityName.substr(0, 1) +
-                                        " (the first of V, S, P, L computed) at the largest radius with a value; "
-                                        "a plane's value (V, S 0.5; P, L 1) where none has one; never NaN"},
-                        {"valid_radii", "how many radii have a value of the quality's invariant (0 to N)"},
-                        {"masked", args.exact ? "NaN where the ball reaches a mesh border, and at vertices not computed"
-                                              : "NaN where the ball of that radius reaches a mesh border"}};
-    const auto& st = result.stats;
-    j["mesh"] = {{"vertices", read.mesh.numVertices()},
-                 {"faces", inputFaces},
-                 {"faces_in_file", inputFaces},
-                 {"faces_removed", [&] {
-                      std::size_t removed = 0;
-                      for (const Diagnostic& c : prepared.changes)
-                          if (c.kind == "degenerate_faces_removed" || c.kind == "duplicate_faces_removed" ||
-                              c.kind == "non_manifold_faces_removed")
-                              removed += c.count;
-                      return removed;
-                  }()},
-                 {"closed", result.check.closed},
-                 {"border_edges", result.check.numBorderEdges},
-                 {"bbox_min", {st.bboxMin.x, st.bboxMin.y, st.bboxMin.z}},
-                 {"bbox_max", {st.bboxMax.x, st.bboxMax.y, st.bboxMax.z}},
-                 {"diagonal", st.diagonal},
-                 {"edge_length", {{"min", st.minEdge}, {"median", st.medianEdge}, {"mean", st.meanEdge}, {"max", st.maxEdge}}},
-                 {"area", st.area},
-                 {"masked_values", result.cost.maskedValues}};
-    j["level_set"] = {{"active_voxels", result.cost.levelSetVoxels}, {"bytes", result.cost.levelSetBytes}};
-    // The process's peak resident memory so far (Linux VmHWM: of this program only, unlike
-    // getrusage, which counts what a parent held when it started the program).
-    if (std::ifstream status("/proc/self/status"); status) {
-        for (std::string line; std::getline(status, line);)
-            if (line.rfind("VmHWM:", 0) == 0) j["peak_memory_bytes"] = std::stod(line.substr(6)) * 1024.0;
-    }
-    const InvariantsCost& t = result.cost;
-    j["timings_seconds"] = {{"read", readSeconds},     {"prepare", prepareSeconds}, {"check", t.check},
-                            {"level_set", t.levelSet}, {"occupancy", t.occupancy},
-                            {"stencils", t.stencils},  {"interpolation", t.interpolation},
-                            {"samples", t.samples},    {"patch_line", t.patchLine},
-                            {"exact", t.exact},        {"write", writeSeconds},
-                            {"total", total.seconds()}};
-    if (tiled)
-        j["tiling"] = {{"tiles_per_axis", tiledInfo.tilesPerAxis},
-                       {"tiles", tiledInfo.tiles},
-                       {"largest_tile_vertices", tiledInfo.largestTileVertices},
-                       {"halo", tiledInfo.haloWidth},
-                       {"estimated_peak_bytes", tiledInfo.estimatedPeakBytes}};
-    j["preparation"] = {
-        {"changes", [&] {
-             nlohmann::json list = nlohmann::json::array();
-             for (const Diagnostic& c : prepared.changes)
-                 list.push_back({{"kind", c.kind}, {"count", c.count}, {"message", c.message}});
-             return list;
-         }()},
-        {"holes", {{"filled", prepared.holes.numFilled},
-                   {"largest_perimeter", prepared.holes.largestPerimeter},
-                   {"area_added", prepared.holes.areaAdded},
-                   {"left_open_too_large", prepared.holes.numTooLarge},
-                   {"left_open_outer_border", prepared.holes.numOuterBorders},
-                   {"not_filled_failed", prepared.holes.numFailed},
-                   {"max_perimeter", prepareOptions.maxHolePerimeter}}},
-        {"isolated_vertices", prepared.numIsolatedVertices},
-        {"prepared_vertices", prepared.mesh.numVertices()},
-        {"prepared_faces", prepared.mesh.numTriangles()}};
-    // Coded (kind, count, figures) for programs, and the sentences as printed.
-    j["diagnostics"] = nlohmann::json::array();
-    j["warnings"] = nlohmann::json::array();
-    for (const std::vector<Diagnostic>* list : {&prepared.changes, &result.diagnostics})
-        for (const Diagnostic& d : *list) {
-            nlohmann::json figures = nlohmann::json::object();
-            for (const auto& [name, value] : d.figures) figures[name] = value;
-            j["diagnostics"].push_back({{"kind", d.kind}, {"count", d.count}, {"figures", figures}, {"message", d.message}});
-            j["warnings"].push_back(worded(d));
-        }
-    writeTextFileAtomic(sidecar, j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+    const MeshRunRecord record{args,           input,   output,    read,    inputFaces, prepareOptions,
+                               prepared,       options, result,    letters, qualityName, readSeconds,
+                               prepareSeconds, writeSeconds, total.seconds(), tiled, tiledInfo};
+    writeTextFileAtomic(sidecar, runRecord(record).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 
     if (!args.quiet)
         std::fprintf(stderr, "msii: %s -> %s (%zu vertices, %.1f s)\n", input.c_str(),

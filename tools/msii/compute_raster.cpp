@@ -129,19 +129,8 @@ OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, co
                    {"windows", {{"per_row", result.windowsPerRow}, {"per_column", result.windowsPerColumn},
                                 {"cells", result.windowCells}, {"halo_cells", result.haloCells}}}};
     j["mesh"] = {{"triangles", result.triangles}, {"masked_values", result.maskedValues}};
-    j["diagnostics"] = nlohmann::json::array();
-    j["warnings"] = nlohmann::json::array();
-    for (const std::vector<Diagnostic>* list : {&result.diagnostics})
-        for (const Diagnostic& d : *list) {
-            nlohmann::json figures = nlohmann::json::object();
-            for (const auto& [key, value] : d.figures) figures[key] = value;
-            j["diagnostics"].push_back({{"kind", d.kind}, {"count", d.count}, {"figures", figures}, {"message", d.message}});
-            j["warnings"].push_back(worded(d));
-        }
-    if (std::ifstream status("/proc/self/status"); status) {
-        for (std::string line; std::getline(status, line);)
-            if (line.rfind("VmHWM:", 0) == 0) j["peak_memory_bytes"] = std::stod(line.substr(6)) * 1024.0;
-    }
+    addDiagnostics(j, {&result.diagnostics});
+    if (const double peak = peakMemoryBytes(); peak > 0) j["peak_memory_bytes"] = peak;
     const InvariantsCost& t = result.cost;
     j["timings_seconds"] = {{"read", result.readSeconds}, {"prepare", result.prepareSeconds}, {"check", t.check},
                             {"level_set", t.levelSet},     {"occupancy", t.occupancy},  {"stencils", t.stencils},
