@@ -124,7 +124,8 @@ std::string performancePage(const std::string& command, const std::string& heade
 Stage timings of `msii compute` on a generated tablet surface (the benchmark's own input: an
 irregular, scanner-like triangulation with cuneiform wedges), medians of the runs, with the
 other commands' costs on its results. Targets: 30 s and 4 GB for the 1.1M-vertex tablet, and
-at most 10 % of the total for mesh preparation.
+at most 10 % of the total for mesh preparation. With `--dem-cells`, also a DEM computed in
+windows: 20 minutes (1,200 s) and 4 GB for 100M cells.
 
 ```bash
 )";
@@ -145,6 +146,10 @@ What the rows are:
   each run once in a process of its own, with that process's peak memory. The Python
   result holds its arrays (vertices, faces and the (n, N) float32 arrays of V, S, P, L) on
   top of the engine's own peak, and should cost no more than that sum.
+- **DEM**: `msii compute` on a generated GeoTIFF DEM (0.5 m cells in EPSG:25832, hills about
+  25 m wide and 4 m high, 200 small nodata patches), R = 15 m, N = 16, V and S, in windows
+  sized to the default 3 GB budget, in a process of its own with its peak memory
+  ([terrain.md](terrain.md#large-areas)).
 
 This machine's timings vary from one sitting to the next, by 15–20 % within a day and by up
 to 2× between days, also in stages whose code did not change: compare builds in alternating
