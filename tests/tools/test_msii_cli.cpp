@@ -2,6 +2,7 @@
 // properties and a JSON record; every kind of bad input ends in one "msii: error:" line, a
 // non-zero exit and no output file.
 #include <msii/io/write_ply.h>
+#include <msii/map/feature_map.h>
 #include <msii/mesh/read_mesh.h>
 #include <msii/samples/generators.h>
 
@@ -700,8 +701,15 @@ TEST(MsiiCli, GeoreferencedCoordinatesWork)
     const fs::path a = tempDir() / "terrain-local.msii.ply", b = tempDir() / "terrain-utm.msii.ply";
     RunResult r = runMsii("compute '" + local.string() + "' -r 3 -n 4 -q --overwrite -o '" + a.string() + "'");
     ASSERT_EQ(r.code, 0) << r.err;
-    r = runMsii("compute '" + utm.string() + "' -r 3 -n 4 -q --overwrite -o '" + b.string() + "'");
+    r = runMsii("compute '" + utm.string() + "' -r 3 -n 4 -q --overwrite --units m -o '" + b.string() + "'");
     ASSERT_EQ(r.code, 0) << r.err;
+    // The units given are stated in the outputs, and the map takes them from there.
+    EXPECT_NE(readFile(b.string()).find("comment units m\n"), std::string::npos);
+    EXPECT_NE(readFile((tempDir() / "terrain-utm.msii.json").string()).find("\"units\": \"m\""), std::string::npos);
+    const fs::path map = tempDir() / "terrain-utm.map.exr";
+    r = runMsii("map '" + b.string() + "' --view +z --pixels 200 -q --overwrite -o '" + map.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(readFeatureMap(map.string(), {"mask"}).units, "m");
     const ReadMeshResult out = readMesh(b.string());
     ASSERT_EQ(out.mesh.numVertices(), mesh.numVertices());
     for (std::size_t i = 0; i < mesh.numVertices(); ++i) ASSERT_EQ(out.mesh.points[i], mesh.points[i]) << i;

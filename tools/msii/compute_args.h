@@ -28,6 +28,7 @@ struct ComputeArgs {
     double precision = 6.0;
     double plPrecision = 0;  // 0 = 4/3 of precision (the engine's default)
     std::string propertyPrefix;  // --property-names
+    std::string units;           // --units: the mesh's units, recorded for pictures (empty: unstated)
     int threads = 0;
     bool quiet = false, overwrite = false, repair = false, strict = false, noSphere = false;
     double fillHoles = -1;      // longest hole border filled; -1 = pi R (default), 0 = none

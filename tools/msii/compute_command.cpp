@@ -315,6 +315,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
                 << " at the largest radius with a value (a plane's value if none), valid_radii = how many "
                    "radii have one";
         plyOptions.comments.push_back(comment.str());
+        if (!args.units.empty()) plyOptions.comments.push_back("units " + args.units);  // read by render and map
         plyOptions.propertyPrefix = args.propertyPrefix;
         if (args.tile >= 0)  // read by msii merge
             plyOptions.comments.push_back("msii tile " + std::to_string(args.tile) + " of " +
@@ -526,6 +527,9 @@ std::function<int()> addComputeCommand(CLI::App& app)
     cmd->add_flag("-q,--quiet", args->quiet, "No progress, no summary; errors only");
     cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs");
     addPropertyNamesOption(cmd, args->propertyPrefix);
+    cmd->add_option("--units", args->units,
+                    "Units of the mesh's coordinates, e.g. mm or m, recorded in the outputs so that pictures' scale "
+                    "bars say them (default: unstated, shown as mm; rasters state theirs)");
     cmd->add_flag("--strict", args->strict,
                   "Refuse meshes that need repair (duplicate or degenerate faces, non-manifold edges or "
                   "vertices, vertices at the same position, inconsistent orientation) instead of repairing them");

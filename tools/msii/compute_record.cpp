@@ -69,7 +69,8 @@ nlohmann::json runRecord(const MeshRunRecord& r)
                        {"exact_vertices", r.options.exactVertices.size()},
                        {"repair", !args.strict},
                        {"max_hole_perimeter", r.prepareOptions.maxHolePerimeter},
-                       {"threads", args.threads}};
+                       {"threads", args.threads},
+                       {"units", args.units}};
     j["conventions"] = {{"V", "V/|B_r| in [0,1], flat plane 0.5, convex < 0.5"},
                         {"S", "S/(4 pi r^2) in [0,1], flat plane 0.5, convex < 0.5"},
                         {"P", "P/(pi r^2), flat plane 1"},

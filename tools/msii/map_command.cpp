@@ -28,7 +28,7 @@ struct MapArgs {
     std::string properties;  // empty: all
     std::string compression = "piz";
     bool half = false;
-    std::string units = "mm";
+    std::string units;  // empty: what the PLY states, else mm
     int threads = 0;
     bool quiet = false, overwrite = false;
 };
@@ -45,6 +45,8 @@ int runMap(const MapArgs& args)
     options.units = args.units;
     const std::string output = outputPath(args.input, args.output, "map", args.overwrite, ".exr");
     FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
+    if (options.units.empty()) options.units = unitsFromComments(in.comments);
+    if (options.units.empty()) options.units = "mm";
 
     std::vector<VertexProperty> chosen;
     if (args.properties.empty()) chosen = std::move(in.properties);
@@ -68,7 +70,7 @@ int runMap(const MapArgs& args)
                      "msii: %s -> %s (%d x %d pixels of %.4g %s, %zu channels, %.1f %% covered; "
                      "raster %.1f s, write %.1f s, total %.1f s)\n",
                      args.input.c_str(), output.c_str(), frame.width, frame.height, frame.pixelSize,
-                     args.units.c_str(), info.channels.size(),
+                     options.units.c_str(), info.channels.size(),
                      100.0 * double(info.coveredPixels) / (double(frame.width) * frame.height),
                      info.rasterSeconds, info.writeSeconds, total.seconds());
     return 0;
@@ -92,7 +94,7 @@ std::function<int()> addMapCommand(CLI::App& app)
                     "Vertex properties to map, comma-separated (default: all)");
     cmd->add_option("--compression", args->compression, "piz (default: the smallest files of feature data), zip, zips, rle or none (about 5 times faster than piz, twice the size); all lossless");
     cmd->add_flag("--half", args->half, "16-bit half channels instead of 32-bit float");
-    cmd->add_option("--units", args->units, "Units of the mesh, for the header (default mm)");
+    cmd->add_option("--units", args->units, "Units of the mesh, for the header (default: what the PLY states, else mm)");
     cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
     cmd->add_flag("-q,--quiet", args->quiet, "No progress, no summary; errors only");
     cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output");

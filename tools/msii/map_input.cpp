@@ -40,6 +40,13 @@ MapFrameOptions frameOptions(const ViewArgs& args, int defaultPixels)
     return o;
 }
 
+std::string unitsFromComments(const std::vector<std::string>& comments)
+{
+    for (const std::string& c : comments)
+        if (c.rfind("units ", 0) == 0 && c.size() > 6) return c.substr(6);
+    return "";
+}
+
 std::vector<double> radiiFromComments(const std::vector<std::string>& comments)
 {
     static const std::regex pattern(R"(msii .* compute.* R=([0-9.eE+-]+) N=([0-9]+))");

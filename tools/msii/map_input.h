@@ -28,4 +28,8 @@ MapFrameOptions frameOptions(const ViewArgs& args, int defaultPixels);
 /// empty when not found.
 std::vector<double> radiiFromComments(const std::vector<std::string>& comments);
 
+/// The units a feature PLY states ("units U" in a comment, written by `msii compute --units
+/// U`); empty when it states none.
+std::string unitsFromComments(const std::vector<std::string>& comments);
+
 } // namespace msii::tools

@@ -112,6 +112,7 @@ Channels channelsFromMesh(const std::string& path, const std::vector<std::string
     const PixelHits hits = rasterize(in.mesh, frame, progress);
     Channels c;
     c.width = frame.width, c.height = frame.height, c.pixelSize = frame.pixelSize;
+    if (const std::string units = unitsFromComments(in.comments); !units.empty()) c.units = units;
     c.data["mask"] = coverageMask(hits);
     if (value == "height") c.data["height"] = hits.depth;
     if (property) c.data[value] = interpolateToPixels(in.mesh, hits, property->values);
@@ -403,7 +404,9 @@ std::function<int()> addRenderCommand(CLI::App& app)
     cmd->add_option("--contrast-radius", args->contrastRadius, "Radius of the local mean in pixels (default 16)");
     cmd->add_flag("--no-colorbar", args->noColorBar, "No colour bar");
     cmd->add_flag("--no-scalebar", args->noScaleBar, "No scale bar");
-    cmd->add_option("--units", args->units, "Units for the scale bar (default mm, or the map's)");
+    cmd->add_option("--units", args->units,
+                    "Units for the scale bar (default: those the input states: a raster's coordinate system, a map's "
+                    "header, msii compute --units; else mm)");
     cmd->add_option("--font", args->font,
                     "Font file (TrueType/OpenType) for the labels (default: environment MSII_FONT, then "
                     "DejaVu Sans through fontconfig, else a built-in pixel font with a warning)");
