@@ -1,6 +1,7 @@
 // msii compute on DEM rasters (docs/terrain.md): georeferenced GeoTIFF out on the input's
 // grid, the same values as the mesh path, nodata as holes, and bad rasters refused cleanly.
 #include <msii/io/write_ply.h>
+#include <msii/map/feature_map.h>
 #include <msii/mesh/read_mesh.h>
 #include <msii/samples/generators.h>
 #include <msii/terrain/dem.h>
@@ -307,4 +308,27 @@ TEST(MsiiTerrain, AsciiGridsAndRectangularCells)
     std::size_t values = 0;
     for (float v : s.bands.back().values) values += !std::isnan(v) && v > 0.3f && v < 0.7f;
     EXPECT_GT(values, dem.numValid * 9 / 10);  // quality of gentle terrain: near the plane's 0.5
+}
+
+// msii render and msii map take the GeoTIFF too: a picture, and an EXR map seen from above
+// with a pixel per cell, in the raster's units, the heights from the DEM it names.
+TEST(MsiiTerrain, RenderAndMapTakeTheGeoTiff)
+{
+    const fs::path out = tempDir() / "pictured.msii.tif";
+    RunResult r = run(MSII_EXE, "compute '" + demSample() + "' -r 5 -n 4 -q --overwrite --raster-output '" + out.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const fs::path png = tempDir() / "pictured.png", exr = tempDir() / "pictured.map.exr";
+    r = run(MSII_EXE, "render '" + out.string() + "' --shade --isolines 3 --pixels 400 --overwrite -o '" + png.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_GT(fs::file_size(png), 10000u);
+    r = run(MSII_EXE, "map '" + out.string() + "' --overwrite -q -o '" + exr.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const FeatureMapImage map = readFeatureMap(exr.string(), {"height", "quality", "mask"});
+    EXPECT_EQ(map.units, "m");
+    EXPECT_DOUBLE_EQ(map.frame.pixelSize, 0.5);
+    EXPECT_EQ(map.radii.size(), 4u);
+    ASSERT_TRUE(map.channels.count("quality") && map.channels.count("height"));
+    std::size_t covered = 0;
+    for (float m : map.channels.at("mask")) covered += m == 1.0f;
+    EXPECT_GT(covered, std::size_t(map.width) * std::size_t(map.height) * 9 / 10);
 }

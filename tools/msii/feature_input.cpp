@@ -4,11 +4,16 @@
 #include <msii/io/atomic_file.h>
 #include <msii/io/feature_table.h>
 #include <msii/mesh/read_mesh.h>
+#include <msii/terrain/dem.h>
+#include <msii/terrain/raster_output.h>
+
+#include "compute_args.h"
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -23,8 +28,64 @@ bool isFeatureName(const std::string& name, char letter)
            std::all_of(name.begin() + 2, name.end(), [](unsigned char c) { return std::isdigit(c); });
 }
 
+FeatureMesh featureMeshFromRaster(const std::string& path)
+{
+    RasterImage raster = readRaster(path);
+    const RasterGeoreference& g = raster.georeference;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (RasterBand& b : raster.bands)  // nodata as NaN
+        if (raster.hasNodata && !std::isnan(raster.nodata))
+            for (float& v : b.values)
+                if (v == float(raster.nodata)) v = nan;
+    std::size_t heightBand = raster.bands.size();
+    for (std::size_t k = 0; k < raster.bands.size(); ++k)
+        if (raster.bands[k].name == "height") heightBand = k;
+    if (heightBand == raster.bands.size() && raster.bands.size() == 1) heightBand = 0;
+    Dem dem;
+    dem.georeference = g;
+    std::string radii;
+    for (const auto& [key, value] : raster.metadata) {
+        if (key == "MSII_RADII") radii = value;
+        if (key == "MSII_INPUT" && heightBand == raster.bands.size() && std::filesystem::exists(value)) {
+            const Dem source = readDem(value);  // its heights, on the same grid
+            if (source.georeference.width == g.width && source.georeference.height == g.height &&
+                source.georeference.transform == g.transform)
+                dem.heights = source.heights;
+        }
+    }
+    if (heightBand < raster.bands.size()) dem.heights = raster.bands[heightBand].values;
+    if (dem.heights.empty())
+        throw InvalidInputError(std::filesystem::path(path).filename().string() +
+                                " has no heights: no band 'height', and its DEM (MSII_INPUT) is not where it was "
+                                "(msii compute --bands ...,height writes them)");
+    for (float h : dem.heights) dem.numValid += !std::isnan(h);
+    const DemMesh dm = demToMesh(dem);
+    FeatureMesh out;
+    out.mesh = dm.mesh;
+    out.cellSize = std::min(std::hypot(g.transform[1], g.transform[4]), std::hypot(g.transform[2], g.transform[5]));
+    for (std::size_t k = 0; k < raster.bands.size(); ++k) {
+        if (k == heightBand) continue;
+        VertexProperty p{raster.bands[k].name.empty() ? "band_" + std::to_string(k + 1) : raster.bands[k].name,
+                         std::vector<float>(dm.mesh.numVertices(), nan)};
+        for (std::size_t c = 0; c < dm.vertexOfCell.size(); ++c)
+            if (dm.vertexOfCell[c] != DemMesh::kNoVertex) p.values[dm.vertexOfCell[c]] = raster.bands[k].values[c];
+        out.properties.push_back(std::move(p));
+    }
+    const std::string units = g.units == "metre" || g.units == "meter" ? "m" : g.units;
+    if (!units.empty()) out.comments.push_back("units " + units);
+    if (!radii.empty()) {  // "0.9375,...,15": as msii compute's PLY comment states them
+        const std::size_t n = std::size_t(std::count(radii.begin(), radii.end(), ',')) + 1;
+        out.comments.push_back("msii raster compute R=" + radii.substr(radii.rfind(',') + 1) + " N=" + std::to_string(n));
+    }
+    return out;
+}
+
 FeatureMesh readFeatureMesh(const std::string& input, const std::vector<std::string>& matFiles)
 {
+    if (isRasterInput(input)) {
+        if (!matFiles.empty()) throw InvalidInputError("GigaMesh files (--mat) go with meshes, not rasters");
+        return featureMeshFromRaster(input);
+    }
     ReadMeshOptions options;
     options.keepVertexProperties = true;
     ReadMeshResult read = readMesh(input, options);

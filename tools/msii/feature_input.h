@@ -12,10 +12,20 @@ struct FeatureMesh {
     TriMesh mesh;
     std::vector<VertexProperty> properties;  ///< every scalar vertex property of the input
     std::vector<std::string> comments;       ///< for the output header
+    double cellSize = 0;                     ///< rasters: the distance between cell centres
 };
 
-/// Reads @p input (any mesh format; PLY keeps its vertex properties) and replaces its V or P
-/// features by those of each GigaMesh `.mat` file in @p matFiles.
+/// A georeferenced raster (a DEM, or the GeoTIFF msii compute writes for one) as a feature
+/// mesh: its heights triangulated at the cell centres as msii compute does (terrain/dem.h),
+/// from a band named "height", the only band, or the DEM the GeoTIFF names (MSII_INPUT);
+/// every other band is a vertex property of its name. Comments state its units, and its
+/// radii where the GeoTIFF records them.
+/// @throw InvalidInputError if no heights are found.
+FeatureMesh featureMeshFromRaster(const std::string& path);
+
+/// Reads @p input (any mesh format; PLY keeps its vertex properties; a raster through
+/// featureMeshFromRaster) and replaces its V or P features by those of each GigaMesh `.mat`
+/// file in @p matFiles.
 FeatureMesh readFeatureMesh(const std::string& input, const std::vector<std::string>& matFiles);
 
 /// Replaces NaN in the property `quality` (if any) by 0: viewers colour by quality without

@@ -38,13 +38,19 @@ constexpr int kDefaultPixels = 2048;
 int runMap(const MapArgs& args)
 {
     const Stopwatch total;
-    const MapFrameOptions frameOpts = frameOptions(args.view, kDefaultPixels);
+    MapFrameOptions frameOpts = frameOptions(args.view, kDefaultPixels);
     FeatureMapOptions options;
     options.compression = parseExrCompression(args.compression);
     options.half = args.half;
     options.units = args.units;
     const std::string output = outputPath(args.input, args.output, "map", args.overwrite, ".exr");
     FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
+    if (in.cellSize > 0) {  // a raster: seen from above, a pixel per cell unless asked otherwise
+        if (!args.view.viewOption || args.view.viewOption->count() == 0) parseMapView("+z", frameOpts);
+        const auto given = [](const CLI::Option* o) { return o && o->count() > 0; };
+        if (!given(args.view.pixelsOption) && !given(args.view.pixelSizeOption) && !given(args.view.dpiOption))
+            frameOpts.longerSidePixels = 0, frameOpts.pixelSize = in.cellSize;
+    }
     if (options.units.empty()) options.units = unitsFromComments(in.comments);
     if (options.units.empty()) options.units = "mm";
 

@@ -9,7 +9,7 @@ namespace msii::tools {
 
 void addViewOptions(CLI::App* cmd, ViewArgs& args, int defaultPixels)
 {
-    cmd->add_option("--view", args.view,
+    args.viewOption = cmd->add_option("--view", args.view,
                     "Projection: best (least-squares plane, default), +x, -x, +y, -y, +z, -z (seen "
                     "from that side) or a direction X,Y,Z from the object towards the viewer");
     cmd->add_flag("--flip", args.flip, "With --view best: look at the other side of the plane");

@@ -17,6 +17,7 @@ struct ViewArgs {
     double pixelSize = 0, dpi = 0;
     /// Whether each resolution option was given (a given 0 is an error, not "default").
     CLI::Option *pixelsOption = nullptr, *pixelSizeOption = nullptr, *dpiOption = nullptr;
+    CLI::Option* viewOption = nullptr;
 };
 
 /// Adds --view, --flip, --pixels, --pixel-size and --dpi to @p cmd.
