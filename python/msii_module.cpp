@@ -247,20 +247,27 @@ py::tuple readMeshArrays(const std::string& path)
     return py::make_tuple(v, f);
 }
 
-void writePlyArrays(const std::string& path, const py::array& vertices, const py::array& faces,
-                    const py::dict& properties)
+/// {name: array of n values} (any dtype, layout or stride) as vertex properties.
+std::vector<VertexProperty> vertexProperties(const py::dict& properties, std::size_t numVertices)
 {
-    const TriMesh mesh = meshOf(vertices, faces);
     std::vector<VertexProperty> props;
     for (const auto& [key, value] : properties) {
         const std::string name = py::str(key);
         const py::array_t<float, py::array::c_style | py::array::forcecast> a =
             py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(value);
-        if (!a || a.ndim() != 1 || std::size_t(a.shape(0)) != mesh.numVertices())
+        if (!a || a.ndim() != 1 || std::size_t(a.shape(0)) != numVertices)
             throw py::value_error("property '" + name + "' must be an array of one value per vertex (" +
-                                  std::to_string(mesh.numVertices()) + ").");
+                                  std::to_string(numVertices) + ").");
         props.push_back({name, std::vector<float>(a.data(), a.data() + a.shape(0))});
     }
+    return props;
+}
+
+void writePlyArrays(const std::string& path, const py::array& vertices, const py::array& faces,
+                    const py::dict& properties)
+{
+    const TriMesh mesh = meshOf(vertices, faces);
+    std::vector<VertexProperty> props = vertexProperties(properties, mesh.numVertices());
     py::gil_scoped_release free;
     writePly(path, mesh, props);
 }
@@ -367,16 +374,7 @@ py::object featureMap(const py::array& vertices, const py::array& faces, const p
                       const std::string& view, double pixelSize, int longerSide)
 {
     const TriMesh mesh = meshOf(vertices, faces);
-    std::vector<VertexProperty> props;
-    for (const auto& [key, value] : properties) {
-        const std::string name = py::str(key);
-        const py::array_t<float, py::array::c_style | py::array::forcecast> a =
-            py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(value);
-        if (!a || a.ndim() != 1 || std::size_t(a.shape(0)) != mesh.numVertices())
-            throw py::value_error("property '" + name + "' must be an array of one value per vertex (" +
-                                  std::to_string(mesh.numVertices()) + ").");
-        props.push_back({name, std::vector<float>(a.data(), a.data() + a.shape(0))});
-    }
+    std::vector<VertexProperty> props = vertexProperties(properties, mesh.numVertices());
     MapFrameOptions fo;
     parseMapView(view, fo);
     if (pixelSize > 0 && longerSide > 0) throw py::value_error("give pixel_size or longer_side, not both.");

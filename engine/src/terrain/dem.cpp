@@ -27,6 +27,18 @@ void initGdal()
     });
 }
 
+void describeCrs(const OGRSpatialReference& srs, RasterGeoreference& g)
+{
+    char* wkt = nullptr;
+    if (srs.exportToWkt(&wkt) == OGRERR_NONE && wkt) g.crsWkt = wkt;
+    CPLFree(wkt);
+    if (const char* n = srs.GetName()) g.crsName = n;
+    if (const char* code = srs.GetAuthorityCode(nullptr)) g.epsg = code;
+    const char* unit = nullptr;
+    srs.GetLinearUnits(&unit);
+    if (unit) g.units = unit;
+}
+
 std::string lastGdalError(const std::string& otherwise)
 {
     const char* msg = CPLGetLastErrorMsg();
@@ -105,14 +117,7 @@ DemSource::DemSource(const std::string& path, const DemReadOptions& options) : m
         throw InvalidInputError(name + " is in geographic coordinates (degrees), whose cells are not square on the "
                                        "ground; reproject it to a projected system first, e.g. gdalwarp -t_srs "
                                        "EPSG:25832 " + name + " projected.tif");
-    char* wkt = nullptr;
-    if (srs->exportToWkt(&wkt) == OGRERR_NONE && wkt) g.crsWkt = wkt;
-    CPLFree(wkt);
-    if (const char* n = srs->GetName()) g.crsName = n;
-    if (const char* code = srs->GetAuthorityCode(nullptr)) g.epsg = code;
-    const char* unit = nullptr;
-    srs->GetLinearUnits(&unit);
-    if (unit) g.units = unit;
+    detail::describeCrs(*srs, g);
     const double det = g.transform[1] * g.transform[5] - g.transform[2] * g.transform[4];
     if (!(std::abs(det) > 0) || !std::isfinite(det)) throw InvalidInputError(name + " has a degenerate geotransform");
     int hasNodata = 0;

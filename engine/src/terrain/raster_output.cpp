@@ -171,16 +171,7 @@ RasterImage readRaster(const std::string& path)
     g.width = ds->GetRasterXSize();
     g.height = ds->GetRasterYSize();
     ds->GetGeoTransform(g.transform.data());
-    if (const OGRSpatialReference* srs = ds->GetSpatialRef(); srs && !srs->IsEmpty()) {
-        char* wkt = nullptr;
-        if (srs->exportToWkt(&wkt) == OGRERR_NONE && wkt) g.crsWkt = wkt;
-        CPLFree(wkt);
-        if (const char* n = srs->GetName()) g.crsName = n;
-        if (const char* code = srs->GetAuthorityCode(nullptr)) g.epsg = code;
-        const char* unit = nullptr;
-        srs->GetLinearUnits(&unit);
-        if (unit) g.units = unit;
-    }
+    if (const OGRSpatialReference* srs = ds->GetSpatialRef(); srs && !srs->IsEmpty()) detail::describeCrs(*srs, g);
     if (char** md = ds->GetMetadata(); md)
         for (int k = 0; md[k]; ++k) {
             const std::string item = md[k];
