@@ -127,7 +127,9 @@ OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, co
                    {"nodata_cells", std::size_t(grid.width) * std::size_t(grid.height) - result.input.numValid},
                    {"bands", result.bands},
                    {"windows", {{"per_row", result.windowsPerRow}, {"per_column", result.windowsPerColumn},
-                                {"cells", result.windowCells}, {"halo_cells", result.haloCells}}}};
+                                {"cells", result.windowCells}, {"halo_cells", result.haloCells},
+                                {"narrow_halo_cells", result.narrowHaloCells},
+                                {"windows_with_wide_halo", result.wideHaloWindows}}}};
     j["mesh"] = {{"triangles", result.triangles}, {"masked_values", result.maskedValues}};
     addDiagnostics(j, {&result.diagnostics});
     if (const double peak = peakMemoryBytes(); peak > 0) j["peak_memory_bytes"] = peak;

@@ -140,6 +140,8 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
     // depend on (the reach), a hole next to the window's edge that the whole raster would
     // fill (at most half its perimeter across), and 4 voxels to spare.
     result.haloCells = oneWindow ? 0 : int(std::ceil((result.plan.reach + 0.5 * maxHole + 4.0 * result.plan.voxelSize) / cell)) + 1;
+    const int narrowHalo = oneWindow ? 0 : int(std::ceil((result.plan.reach + 4.0 * result.plan.voxelSize) / cell)) + 1;
+    result.narrowHaloCells = narrowHalo;
     int side = options.windowCells;
     if (oneWindow) side = std::max(W, H);
     else if (side == 0) side = int(std::floor(std::sqrt(cellsPerWindow))) - 2 * result.haloCells;
@@ -161,11 +163,32 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
         for (int wx = 0; wx < result.windowsPerRow; ++wx) {
             const int ownCol = wx * side, ownRow = wy * side;
             const int ownCols = std::min(side, W - ownCol), ownRows = std::min(side, H - ownRow);
-            const int col0 = std::max(0, ownCol - result.haloCells), row0 = std::max(0, ownRow - result.haloCells);
-            const int col1 = std::min(W, ownCol + ownCols + result.haloCells),
-                      row1 = std::min(H, ownRow + ownRows + result.haloCells);
+            // The narrow halo (the reach) suffices unless a nodata gap crosses its edge: such a
+            // gap would be filled in the whole DEM but is a border in the window. A gap that
+            // crosses has a cell on the narrow window's outermost rows or columns (those on
+            // the DEM's edge excepted: there the whole DEM has the same border).
             stage.restart();
-            const Dem dem = source.read(col0, row0, col1 - col0, row1 - row0);
+            const auto windowOf = [&](int halo) {
+                return std::array<int, 4>{std::max(0, ownCol - halo), std::max(0, ownRow - halo),
+                                          std::min(W, ownCol + ownCols + halo), std::min(H, ownRow + ownRows + halo)};
+            };
+            std::array<int, 4> box = windowOf(narrowHalo);
+            Dem dem = source.read(box[0], box[1], box[2] - box[0], box[3] - box[1]);
+            if (narrowHalo < result.haloCells) {
+                const int w = box[2] - box[0], h = box[3] - box[1];
+                bool crossed = false;
+                const auto gap = [&](int x, int y) { return std::isnan(dem.heights[std::size_t(y) * std::size_t(w) + std::size_t(x)]); };
+                for (int x = 0; x < w && !crossed; ++x)
+                    crossed = (box[1] > 0 && gap(x, 0)) || (box[3] < H && gap(x, h - 1));
+                for (int y = 0; y < h && !crossed; ++y)
+                    crossed = (box[0] > 0 && gap(0, y)) || (box[2] < W && gap(w - 1, y));
+                if (crossed) {
+                    box = windowOf(result.haloCells);
+                    dem = source.read(box[0], box[1], box[2] - box[0], box[3] - box[1]);
+                    ++result.wideHaloWindows;
+                }
+            }
+            const int col0 = box[0], row0 = box[1], col1 = box[2];
             const DemMesh dm = demToMesh(dem);
             result.readSeconds += stage.seconds();
             const int window = wy * result.windowsPerRow + wx;

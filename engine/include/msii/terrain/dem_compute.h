@@ -6,11 +6,11 @@
 /// their place in the output raster. The surface is never held whole, so memory stays at
 /// one window's computation whatever the raster's size (docs/terrain.md).
 ///
-/// All windows share one plan: the voxel size and P and L's vertex spacing from the first
+/// All windows share one plan: the voxel size and P and L's vertex spacing from the central
 /// window's mesh, and the local frame's origin at the raster's centre; the halo reaches past
-/// everything a value depends on (ScalePlan::reach), plus the widest hole that is filled,
-/// plus 4 voxels. So a window's own values are those of the whole raster computed as one
-/// piece, bit for bit (tested), and there are no seams.
+/// everything a value depends on (ScalePlan::reach) plus 4 voxels, and where a nodata gap
+/// crosses its edge also the widest gap that is filled. So a window's own values are those
+/// of the whole raster computed as one piece, bit for bit (tested), and there are no seams.
 
 #include <msii/core/diagnostics.h>
 #include <msii/core/run_context.h>
@@ -45,7 +45,11 @@ struct DemComputeResult {
     ScalePlan plan;
     std::vector<std::string> bands;          ///< as written
     std::vector<Diagnostic> diagnostics;     ///< summed over the windows
-    int windowsPerRow = 1, windowsPerColumn = 1, windowCells = 0, haloCells = 0;
+    int windowsPerRow = 1, windowsPerColumn = 1, windowCells = 0;
+    /// The halo: narrow (the reach) unless a nodata gap crosses its edge, then wide (plus
+    /// the widest gap filled); windows are sized for the wide one.
+    int haloCells = 0, narrowHaloCells = 0;
+    int wideHaloWindows = 0;       ///< windows that needed the wide halo
     std::size_t triangles = 0;     ///< of all windows' own squares
     std::size_t maskedValues = 0;  ///< own cells' values of the first invariant masked (NaN), all radii
     InvariantsCost cost;           ///< summed over the windows
