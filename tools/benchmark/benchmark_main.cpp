@@ -683,11 +683,14 @@ int main(int argc, char** argv)
         const nlohmann::json& d = dem.json;
         const double cells = double(dem.side) * dem.side;
         report.print("\nDEM %d x %d cells of 0.5 m (GeoTIFF, EPSG:25832, %.0f cells with heights); msii compute -r 15 "
-                     "-n 16 --invariants V,S: %d x %d windows of %d cells, halo %d cells; one run each, separate "
-                     "processes\n\n",
+                     "-n 16 --invariants V,S: %d x %d windows of %d cells, halo %d cells (%d where no nodata gap "
+                     "crosses it, in %d windows); one run each, separate processes\n\n",
                      dem.side, dem.side, d["raster"]["cells_with_height"].get<double>(),
                      d["raster"]["windows"]["per_row"].get<int>(), d["raster"]["windows"]["per_column"].get<int>(),
-                     d["raster"]["windows"]["cells"].get<int>(), d["raster"]["windows"]["halo_cells"].get<int>());
+                     d["raster"]["windows"]["cells"].get<int>(), d["raster"]["windows"]["halo_cells"].get<int>(),
+                     d["raster"]["windows"]["narrow_halo_cells"].get<int>(),
+                     d["raster"]["windows"]["per_row"].get<int>() * d["raster"]["windows"]["per_column"].get<int>() -
+                         d["raster"]["windows"]["windows_with_wide_halo"].get<int>());
         report.print("| %-62s | %8s | %8s |\n|%s|%s|%s|\n", "stage", "seconds", "peak MB", std::string(64, '-').c_str(),
                      std::string(10, '-').c_str(), std::string(10, '-').c_str());
         report.print("| %-62s | %8.1f | %8.0f |\n", "msii-samples terrain --geotiff", dem.generate.seconds,
