@@ -103,6 +103,9 @@ struct MeshRunRecord {
     const TiledComputeInfo& tiledInfo;
 };
 nlohmann::json runRecord(const MeshRunRecord& record);
+/// The `parameters` of a JSON record, mesh or raster (@p letters: the invariants, e.g. "VS").
+nlohmann::json parametersRecord(const ComputeArgs& args, const ScalePlan& plan, const std::string& letters,
+                                double maxHolePerimeter);
 
 /// This process's peak resident memory so far, bytes (0 if unknown).
 double peakMemoryBytes();

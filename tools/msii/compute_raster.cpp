@@ -95,28 +95,12 @@ OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, co
     j["command"] = "compute";
     j["input"] = {{"path", fs::absolute(input).string()}, {"format", "raster"}, {"band", result.input.band}};
     j["output"] = fs::absolute(output).string();
-    j["parameters"] = {{"radius", args.radius},
-                       {"scales", result.plan.radii.size()},
-                       {"radii", result.plan.radii},
-                       {"voxel_size", result.plan.voxelSize},
-                       {"voxel_size_requested", args.voxelSize},
-                       {"precision_voxels_per_radius", args.precision},
-                       {"precision_patch_line", plPrecisionOf(args)},
-                       {"levels", result.plan.numVolumeSphereLevels()},
-                       {"level_of_radius", result.plan.volumeSphereLevels},
-                       {"sample_level_of_radius", result.plan.patchLineLevels},
-                       {"reach", result.plan.reach},
-                       {"invariants", [&] {
-                            nlohmann::json list = nlohmann::json::array();
-                            for (const auto& [on, c] : {std::pair{sel.volume, "V"}, std::pair{sel.sphere, "S"},
-                                                        std::pair{sel.patch, "P"}, std::pair{sel.line, "L"}})
-                                if (on) list.push_back(c);
-                            return list;
-                        }()},
-                       {"mode", "fast"},
-                       {"repair", true},
-                       {"max_hole_perimeter", args.fillHoles >= 0 ? args.fillHoles : defaultMaxHolePerimeter(args.radius)},
-                       {"threads", args.threads}};
+    std::string letters;
+    for (const auto& [on, c] : {std::pair{sel.volume, 'V'}, std::pair{sel.sphere, 'S'}, std::pair{sel.patch, 'P'},
+                                std::pair{sel.line, 'L'}})
+        if (on) letters += c;
+    j["parameters"] = parametersRecord(args, result.plan, letters,
+                                       args.fillHoles >= 0 ? args.fillHoles : defaultMaxHolePerimeter(args.radius));
     j["raster"] = {{"width", grid.width},
                    {"height", grid.height},
                    {"geotransform", grid.transform},

@@ -35,42 +35,45 @@ void addDiagnostics(nlohmann::json& record, const std::vector<const std::vector<
         }
 }
 
+nlohmann::json parametersRecord(const ComputeArgs& args, const ScalePlan& plan, const std::string& letters,
+                                double maxHolePerimeter)
+{
+    nlohmann::json invariants = nlohmann::json::array();
+    for (char c : letters) invariants.push_back(std::string(1, c));
+    return {{"radius", args.radius},
+            {"scales", plan.radii.size()},
+            {"radii", plan.radii},
+            {"voxel_size", plan.voxelSize},
+            {"voxel_size_requested", args.voxelSize},
+            {"precision_voxels_per_radius", args.precision},
+            {"precision_patch_line", plPrecisionOf(args)},
+            {"levels", plan.numVolumeSphereLevels()},
+            {"level_of_radius", plan.volumeSphereLevels},
+            {"sample_level_of_radius", plan.patchLineLevels},
+            {"reach", plan.reach},
+            {"invariants", invariants},
+            {"mode", args.exact ? "exact" : "fast"},
+            {"repair", !args.strict},
+            {"max_hole_perimeter", maxHolePerimeter},
+            {"threads", args.threads},
+            {"units", args.units}};
+}
+
 nlohmann::json runRecord(const MeshRunRecord& r)
 {
     const ComputeArgs& args = r.args;
     const ScalePlan& plan = r.result.plan;
     const InvariantsResult& result = r.result;
     const PrepareMeshResult& prepared = r.prepared;
-    const std::size_t n = plan.radii.size();
     nlohmann::json j;
     j["program"] = "msii";
     j["version"] = versionString();
     j["command"] = "compute";
     j["input"] = {{"path", fs::absolute(r.input).string()}, {"format", r.read.format}};
     j["output"] = fs::absolute(r.output).string();
-    j["parameters"] = {{"radius", args.radius},
-                       {"scales", n},
-                       {"radii", plan.radii},
-                       {"voxel_size", plan.voxelSize},
-                       {"voxel_size_requested", args.voxelSize},
-                       {"precision_voxels_per_radius", args.precision},
-                       {"precision_patch_line", plPrecisionOf(args)},
-                       {"levels", plan.numVolumeSphereLevels()},
-                       {"level_of_radius", plan.volumeSphereLevels},
-                       {"sample_level_of_radius", plan.patchLineLevels},
-                       {"reach", plan.reach},
-                       {"band_half_width_voxels", result.cost.bandHalfWidth},
-                       {"invariants", [&] {
-                            nlohmann::json list = nlohmann::json::array();
-                            for (char c : r.letters) list.push_back(std::string(1, c));
-                            return list;
-                        }()},
-                       {"mode", args.exact ? "exact" : "fast"},
-                       {"exact_vertices", r.options.exactVertices.size()},
-                       {"repair", !args.strict},
-                       {"max_hole_perimeter", r.prepareOptions.maxHolePerimeter},
-                       {"threads", args.threads},
-                       {"units", args.units}};
+    j["parameters"] = parametersRecord(args, plan, r.letters, r.prepareOptions.maxHolePerimeter);
+    j["parameters"]["band_half_width_voxels"] = result.cost.bandHalfWidth;
+    j["parameters"]["exact_vertices"] = r.options.exactVertices.size();
     j["conventions"] = {{"V", "V/|B_r| in [0,1], flat plane 0.5, convex < 0.5"},
                         {"S", "S/(4 pi r^2) in [0,1], flat plane 0.5, convex < 0.5"},
                         {"P", "P/(pi r^2), flat plane 1"},

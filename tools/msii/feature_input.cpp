@@ -28,51 +28,78 @@ bool isFeatureName(const std::string& name, char letter)
            std::all_of(name.begin() + 2, name.end(), [](unsigned char c) { return std::isdigit(c); });
 }
 
+namespace {
+
+void nodataAsNaN(RasterImage& raster)
+{
+    if (!raster.hasNodata || std::isnan(raster.nodata)) return;
+    for (RasterBand& b : raster.bands)
+        for (float& v : b.values)
+            if (v == float(raster.nodata)) v = std::numeric_limits<float>::quiet_NaN();
+}
+
+} // namespace
+
+RasterInput readRasterInput(const std::string& path, bool needHeights)
+{
+    RasterInput in;
+    in.raster = readRaster(path);
+    nodataAsNaN(in.raster);
+    const RasterGeoreference& g = in.raster.georeference;
+    // Short names for the scale bar and the units comment.
+    in.units = g.units == "metre" || g.units == "meter" || g.units == "Meter"                 ? "m"
+               : g.units == "foot" || g.units == "US survey foot" || g.units == "foot_us" ? "ft"
+                                                                                          : g.units;
+    for (const RasterBand& b : in.raster.bands)
+        if (b.name == "height") in.heights = b.values;
+    if (in.heights.empty() && in.raster.bands.size() == 1) in.heights = in.raster.bands.front().values;
+    if (in.heights.empty() && needHeights)  // msii compute's GeoTIFFs name their DEM
+        for (const auto& [key, file] : in.raster.metadata)
+            if (key == "MSII_INPUT" && std::filesystem::exists(file)) {
+                RasterImage source = readRaster(file);
+                const RasterGeoreference& s = source.georeference;
+                if (s.width == g.width && s.height == g.height && s.transform == g.transform && !source.bands.empty()) {
+                    nodataAsNaN(source);
+                    in.heights = std::move(source.bands.front().values);
+                }
+            }
+    return in;
+}
+
 FeatureMesh featureMeshFromRaster(const std::string& path)
 {
-    RasterImage raster = readRaster(path);
+    RasterInput in = readRasterInput(path, true);
+    const RasterImage& raster = in.raster;
     const RasterGeoreference& g = raster.georeference;
     const float nan = std::numeric_limits<float>::quiet_NaN();
-    for (RasterBand& b : raster.bands)  // nodata as NaN
-        if (raster.hasNodata && !std::isnan(raster.nodata))
-            for (float& v : b.values)
-                if (v == float(raster.nodata)) v = nan;
-    std::size_t heightBand = raster.bands.size();
-    for (std::size_t k = 0; k < raster.bands.size(); ++k)
-        if (raster.bands[k].name == "height") heightBand = k;
-    if (heightBand == raster.bands.size() && raster.bands.size() == 1) heightBand = 0;
-    Dem dem;
-    dem.georeference = g;
-    std::string radii;
-    for (const auto& [key, value] : raster.metadata) {
-        if (key == "MSII_RADII") radii = value;
-        if (key == "MSII_INPUT" && heightBand == raster.bands.size() && std::filesystem::exists(value)) {
-            const Dem source = readDem(value);  // its heights, on the same grid
-            if (source.georeference.width == g.width && source.georeference.height == g.height &&
-                source.georeference.transform == g.transform)
-                dem.heights = source.heights;
-        }
-    }
-    if (heightBand < raster.bands.size()) dem.heights = raster.bands[heightBand].values;
-    if (dem.heights.empty())
+    if (in.heights.empty())
         throw InvalidInputError(std::filesystem::path(path).filename().string() +
                                 " has no heights: no band 'height', and its DEM (MSII_INPUT) is not where it was "
                                 "(msii compute --bands ...,height writes them)");
+    // The bands other than the heights become vertex properties.
+    std::size_t heightBand = raster.bands.size();
+    for (std::size_t k = 0; k < raster.bands.size(); ++k)
+        if (raster.bands[k].name == "height" || raster.bands.size() == 1) heightBand = k;
+    std::string radii;
+    for (const auto& [key, value] : raster.metadata)
+        if (key == "MSII_RADII") radii = value;
+    Dem dem;
+    dem.georeference = g;
+    dem.heights = std::move(in.heights);
     for (float h : dem.heights) dem.numValid += !std::isnan(h);
-    const DemMesh dm = demToMesh(dem);
+    DemMesh dm = demToMesh(dem);
     FeatureMesh out;
-    out.mesh = dm.mesh;
+    out.mesh = std::move(dm.mesh);
     out.cellSize = std::min(std::hypot(g.transform[1], g.transform[4]), std::hypot(g.transform[2], g.transform[5]));
     for (std::size_t k = 0; k < raster.bands.size(); ++k) {
         if (k == heightBand) continue;
         VertexProperty p{raster.bands[k].name.empty() ? "band_" + std::to_string(k + 1) : raster.bands[k].name,
-                         std::vector<float>(dm.mesh.numVertices(), nan)};
+                         std::vector<float>(out.mesh.numVertices(), nan)};
         for (std::size_t c = 0; c < dm.vertexOfCell.size(); ++c)
             if (dm.vertexOfCell[c] != DemMesh::kNoVertex) p.values[dm.vertexOfCell[c]] = raster.bands[k].values[c];
         out.properties.push_back(std::move(p));
     }
-    const std::string units = g.units == "metre" || g.units == "meter" ? "m" : g.units;
-    if (!units.empty()) out.comments.push_back("units " + units);
+    if (!in.units.empty()) out.comments.push_back("units " + in.units);
     if (!radii.empty()) {  // "0.9375,...,15": as msii compute's PLY comment states them
         const std::size_t n = std::size_t(std::count(radii.begin(), radii.end(), ',')) + 1;
         out.comments.push_back("msii raster compute R=" + radii.substr(radii.rfind(',') + 1) + " N=" + std::to_string(n));

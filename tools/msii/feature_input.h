@@ -2,6 +2,7 @@
 // What `msii metric` and `msii smooth` share: reading a feature PLY (and GigaMesh .mat
 // files) with all its vertex properties, and writing the result next to it.
 #include <msii/mesh/trimesh.h>
+#include <msii/terrain/raster_output.h>
 
 #include <string>
 #include <vector>
@@ -14,6 +15,17 @@ struct FeatureMesh {
     std::vector<std::string> comments;       ///< for the output header
     double cellSize = 0;                     ///< rasters: the distance between cell centres
 };
+
+/// A georeferenced raster (a DEM, or the GeoTIFF msii compute writes for one) read for the
+/// feature commands: its bands with nodata as NaN, and its heights: the band named
+/// "height", the only band, or (with @p needHeights) the DEM the GeoTIFF names
+/// (MSII_INPUT) when it lies on the same grid; empty if none is found.
+struct RasterInput {
+    RasterImage raster;
+    std::vector<float> heights;
+    std::string units;  ///< the coordinate system's unit, "m" for metres
+};
+RasterInput readRasterInput(const std::string& path, bool needHeights);
 
 /// A georeferenced raster (a DEM, or the GeoTIFF msii compute writes for one) as a feature
 /// mesh: its heights triangulated at the cell centres as msii compute does (terrain/dem.h),

@@ -124,14 +124,6 @@ Channels channelsFromMesh(const std::string& path, const std::vector<std::string
     return c;
 }
 
-/// The unit's short name for the scale bar: "m" for GDAL's "metre", else as given.
-std::string shortUnits(const std::string& units)
-{
-    if (units == "metre" || units == "meter" || units == "Meter") return "m";
-    if (units == "foot" || units == "US survey foot" || units == "foot_us") return "ft";
-    return units;
-}
-
 /// The same channels from a georeferenced raster (a DEM, or the GeoTIFF msii compute writes
 /// for one): @p value is a band by its description; the normals, for shading, come from a
 /// band named "height" (or the only band), else from the DEM the GeoTIFF names. Rasters larger
@@ -140,36 +132,14 @@ std::string shortUnits(const std::string& units)
 Channels channelsFromRaster(const std::string& path, const std::string& value, bool needNormals, int pixels,
                             bool orRelief = false)
 {
-    RasterImage raster = readRaster(path);
-    const RasterGeoreference& g = raster.georeference;
+    const RasterInput in = readRasterInput(path, needNormals || orRelief);
+    const RasterGeoreference& g = in.raster.georeference;
     std::vector<std::string> names;
-    for (const RasterBand& b : raster.bands) names.push_back(b.name.empty() ? "(unnamed)" : b.name);
-    const auto band = [&](const std::string& name) -> RasterBand* {
-        for (RasterBand& b : raster.bands)
-            if (b.name == name) return &b;
-        return nullptr;
-    };
-    for (RasterBand& b : raster.bands)  // nodata as NaN
-        if (raster.hasNodata && !std::isnan(raster.nodata))
-            for (float& v : b.values)
-                if (v == float(raster.nodata)) v = std::numeric_limits<float>::quiet_NaN();
-    RasterBand* heights = band("height");
-    if (!heights && raster.bands.size() == 1) heights = &raster.bands.front();
-    // msii compute's GeoTIFFs name their DEM (MSII_INPUT): its heights shade them.
-    RasterImage source;
-    if (!heights && (needNormals || orRelief))
-        for (const auto& [key, file] : raster.metadata)
-            if (key == "MSII_INPUT" && fs::exists(file)) {
-                source = readRaster(file);
-                if (source.georeference.width == g.width && source.georeference.height == g.height &&
-                    source.georeference.transform == g.transform && !source.bands.empty()) {
-                    heights = &source.bands.front();
-                    if (source.hasNodata && !std::isnan(source.nodata))
-                        for (float& v : heights->values)
-                            if (v == float(source.nodata)) v = std::numeric_limits<float>::quiet_NaN();
-                }
-            }
-    RasterBand* shown = value.empty() || value == "height" ? heights : band(value);
+    for (const RasterBand& b : in.raster.bands) names.push_back(b.name.empty() ? "(unnamed)" : b.name);
+    const std::vector<float>* heights = in.heights.empty() ? nullptr : &in.heights;
+    const std::vector<float>* shown = value.empty() || value == "height" ? heights : nullptr;
+    for (const RasterBand& b : in.raster.bands)
+        if (!shown && b.name == value) shown = &b.values;
     if (!value.empty() && !shown && !(orRelief && heights))
         throw InvalidInputError("the raster has no band '" + value + "' (it has: " + available(names) + ")");
     if ((needNormals || (orRelief && !shown)) && !heights)
@@ -223,10 +193,10 @@ Channels channelsFromRaster(const std::string& path, const std::string& value, b
     c.width = pw, c.height = ph;
     const double cellX = std::hypot(g.transform[1], g.transform[4]), cellY = std::hypot(g.transform[2], g.transform[5]);
     c.pixelSize = step * std::sqrt(cellX * cellY) / zoom;
-    c.units = g.units.empty() ? "units" : shortUnits(g.units);
-    std::vector<float> valueCells = shown ? enlarge(reduce(shown->values)) : std::vector<float>{};
+    c.units = in.units.empty() ? "units" : in.units;
+    std::vector<float> valueCells = shown ? enlarge(reduce(*shown)) : std::vector<float>{};
     std::vector<float>& mask = c.data["mask"];
-    const std::vector<float> heightCells = heights ? enlarge(reduce(heights->values)) : std::vector<float>{};
+    const std::vector<float> heightCells = heights ? enlarge(reduce(*heights)) : std::vector<float>{};
     const std::vector<float>& coverage = shown ? valueCells : heightCells;
     mask.resize(coverage.size());
     for (std::size_t k = 0; k < mask.size(); ++k) mask[k] = std::isnan(coverage[k]) ? 0.0f : 1.0f;

@@ -107,34 +107,25 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
     const bool oneWindow = options.windowCells == 0 ? double(W) * double(H) <= cellsPerWindow
                                                     : options.windowCells >= std::max(W, H);
 
-    // The plan: from the whole raster when it is one window (then the values are exactly
-    // those of its mesh computed by the mesh path), else from a window of 1024² cells at
-    // the centre, which all windows then share.
+    // Several windows share one plan, made on a window of 1024² cells at the centre. One
+    // window makes its own, as the mesh path would (then its values are exactly those of
+    // its mesh computed by the mesh path).
     InvariantsOptions shared = asked;
     PrepareMeshOptions po;
     po.maxHolePerimeter = maxHole;
     po.radius = radius;
-    {
-        const int pc = oneWindow ? W : std::min(W, 1024), pr = oneWindow ? H : std::min(H, 1024);
-        const Dem probe = source.read((W - pc) / 2, (H - pr) / 2, pc, pr);
-        const DemMesh pm = demToMesh(probe);
-        if (pm.mesh.numTriangles() == 0) {
-            if (oneWindow)
-                throw InvalidInputError(fileName(input) + (probe.numValid == 0 ? " has no cell with a height (all nodata)"
-                                                                               : ": no 2 x 2 block of cells has heights, "
-                                                                                 "so there is no surface to compute on"));
+    if (!oneWindow) {
+        const int pc = std::min(W, 1024), pr = std::min(H, 1024);
+        const DemMesh pm = demToMesh(source.read((W - pc) / 2, (H - pr) / 2, pc, pr));
+        if (pm.mesh.numTriangles() == 0)
             throw InvalidInputError(fileName(input) + ": the window at its centre has no surface to plan the "
                                                       "computation on");
-        }
-        const PrepareMeshResult prepared = prepareMesh(pm.mesh, po);
-        const InvariantsResult plan = prepareComputation(prepared.mesh, shared);
+        const InvariantsResult plan = prepareComputation(prepareMesh(pm.mesh, po).mesh, shared);
         result.plan = plan.plan;
-        if (!oneWindow) {
-            shared.voxelSize = plan.plan.voxelSize;
-            shared.vertexSpacing = shared.vertexSpacing > 0 ? shared.vertexSpacing : plan.stats.medianEdge;
-            const double midX = t[0] + 0.5 * W * t[1] + 0.5 * H * t[2], midY = t[3] + 0.5 * W * t[4] + 0.5 * H * t[5];
-            shared.localOrigin = Vec3{midX, midY, 0.5 * (plan.stats.bboxMin.z + plan.stats.bboxMax.z)};
-        }
+        shared.voxelSize = plan.plan.voxelSize;
+        shared.vertexSpacing = shared.vertexSpacing > 0 ? shared.vertexSpacing : plan.stats.medianEdge;
+        const double midX = t[0] + 0.5 * W * t[1] + 0.5 * H * t[2], midY = t[3] + 0.5 * W * t[4] + 0.5 * H * t[5];
+        shared.localOrigin = Vec3{midX, midY, 0.5 * (plan.stats.bboxMin.z + plan.stats.bboxMax.z)};
     }
     // A window's own cells take their values from its mesh: the halo holds everything they
     // depend on (the reach), a hole next to the window's edge that the whole raster would
@@ -202,6 +193,7 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
                 result.prepareSeconds += stage.seconds();
                 for (const Diagnostic& d : prepared.changes) diagnostics.add(d);
                 const InvariantsResult r = computeInvariants(prepared.mesh, shared, context);
+                if (oneWindow) result.plan = r.plan;
                 for (const Diagnostic& d : r.diagnostics)
                     if (d.kind != "mostly_masked") diagnostics.add(d);  // counted below over own cells
                 const InvariantsCost& c = r.cost;
@@ -239,6 +231,10 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
                         }
                 }
                 result.triangles += dm.mesh.numTriangles();
+            } else if (oneWindow) {
+                throw InvalidInputError(fileName(input) + (dem.numValid == 0 ? " has no cell with a height (all nodata)"
+                                                                             : ": no 2 x 2 block of cells has heights, "
+                                                                               "so there is no surface to compute on"));
             } else {
                 stage.restart();
                 cells.assign(result.bands.size(), std::vector<float>(dm.vertexOfCell.size(), std::numeric_limits<float>::quiet_NaN()));

@@ -30,53 +30,6 @@ CPLStringList cogCreationOptions()
 
 } // namespace
 
-void writeRaster(const std::string& path, const RasterGeoreference& grid, const std::vector<RasterBand>& bands,
-                 const RasterOutputOptions& options)
-{
-    detail::initGdal();
-    if (bands.empty()) throw InvalidInputError("no band to write");
-    const std::size_t cells = std::size_t(grid.width) * std::size_t(grid.height);
-    for (const RasterBand& b : bands)
-        if (b.values.size() != cells)
-            throw InvalidInputError("band '" + b.name + "' has " + std::to_string(b.values.size()) +
-                                    " values for a grid of " + std::to_string(cells) + " cells");
-    GDALDriver* mem = GetGDALDriverManager()->GetDriverByName("MEM");
-    GDALDriver* cog = GetGDALDriverManager()->GetDriverByName("COG");
-    if (!mem || !cog) throw IOError("GDAL lacks its MEM or COG driver");
-    CPLErrorReset();
-    detail::GdalDataset staged(mem->Create("", grid.width, grid.height, int(bands.size()), GDT_Float32, nullptr));
-    if (!staged) throw IOError("cannot stage the raster in memory: " + detail::lastGdalError("out of memory?"));
-    std::array<double, 6> transform = grid.transform;
-    staged->SetGeoTransform(transform.data());
-    if (!grid.crsWkt.empty()) staged->SetProjection(grid.crsWkt.c_str());
-    if (!options.description.empty()) staged->SetMetadataItem("TIFFTAG_IMAGEDESCRIPTION", options.description.c_str());
-    for (const auto& [key, value] : options.metadata) staged->SetMetadataItem(key.c_str(), value.c_str());
-    for (std::size_t k = 0; k < bands.size(); ++k) {
-        GDALRasterBand* band = staged->GetRasterBand(int(k) + 1);
-        band->SetDescription(bands[k].name.c_str());
-        band->SetNoDataValue(options.nodata);
-        std::vector<float> values;
-        const std::vector<float>* from = &bands[k].values;
-        if (!std::isnan(options.nodata)) {  // NaN stands for nodata in the values
-            values = bands[k].values;
-            for (float& v : values)
-                if (std::isnan(v)) v = float(options.nodata);
-            from = &values;
-        }
-        if (band->RasterIO(GF_Write, 0, 0, grid.width, grid.height, const_cast<float*>(from->data()), grid.width,
-                           grid.height, GDT_Float32, 0, 0, nullptr) != CE_None)
-            throw IOError("cannot stage band '" + bands[k].name + "': " + detail::lastGdalError("write error"));
-    }
-    AtomicFile file(path);
-    const CPLStringList cogOptions = cogCreationOptions();
-    detail::GdalDataset written(
-        cog->CreateCopy(file.temporaryPath().c_str(), staged.get(), FALSE, cogOptions.List(), nullptr, nullptr));
-    if (!written) throw IOError("cannot write '" + path + "': " + detail::lastGdalError("write error"));
-    written.reset();  // closes (flushes) the file before it is renamed
-    file.commit();
-}
-
-
 struct RasterPieceWriter::Impl {
     std::string path;
     RasterOutputOptions options;
@@ -157,6 +110,24 @@ void RasterPieceWriter::commit()
     m.dataset.reset();
     m.target->commit();
     m.intermediate.reset();  // removes the intermediate file
+}
+
+void writeRaster(const std::string& path, const RasterGeoreference& grid, const std::vector<RasterBand>& bands,
+                 const RasterOutputOptions& options)
+{
+    if (bands.empty()) throw InvalidInputError("no band to write");
+    const std::size_t cells = std::size_t(grid.width) * std::size_t(grid.height);
+    std::vector<std::string> names;
+    for (const RasterBand& b : bands) {
+        if (b.values.size() != cells)
+            throw InvalidInputError("band '" + b.name + "' has " + std::to_string(b.values.size()) +
+                                    " values for a grid of " + std::to_string(cells) + " cells");
+        names.push_back(b.name);
+    }
+    RasterPieceWriter writer(path, grid, names, options);
+    for (std::size_t k = 0; k < bands.size(); ++k)
+        writer.write(int(k), 0, 0, grid.width, grid.height, bands[k].values.data());
+    writer.commit();
 }
 
 RasterImage readRaster(const std::string& path)
