@@ -275,7 +275,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     const double prepareSeconds = prepareWatch.seconds();
     if (!args.quiet)
         for (const Diagnostic& c : prepared.changes)
-            std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), c.message.c_str());
+            std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), worded(c).c_str());
     const std::vector<float>& filledShare = prepared.filledShare;  // radius given: one per vertex
 
     InvariantsOptions options;
