@@ -1,5 +1,8 @@
 // Reads a mesh, computes V̂ at 16 radii for every vertex and writes them as CSV, one row per
-// vertex: the smallest program on msii's library (docs/library.md).
+// vertex: the smallest program on msii's library (docs/library.md). It runs the pipeline of
+// `msii compute` (msii::compute: mesh preparation, the invariants, the values mapped back
+// to the file's vertices), so a scan with duplicate faces or holes gets the same values here
+// as from the command line and Python.
 //   volume_csv MESH RADIUS OUT.csv
 #include <msii/msii.h>
 
@@ -15,11 +18,13 @@ int main(int argc, char** argv)
     }
     try {
         const msii::TriMesh mesh = msii::readMesh(argv[1]).mesh;
-        msii::InvariantsOptions options;
-        options.radius = std::atof(argv[2]);
-        options.scales = 16;
-        options.computeSphere = options.computePatch = options.computeLine = false;  // V only
-        const msii::InvariantsResult result = msii::computeInvariants(mesh, options);
+        msii::ComputeOptions options;
+        options.invariants.radius = std::atof(argv[2]);
+        options.invariants.scales = 16;
+        options.invariants.select(msii::parseInvariantList("V"));
+        const msii::ComputeResult result = msii::compute(mesh, options);
+        for (const msii::Diagnostic& d : result.diagnostics)  // what was repaired or filled
+            std::fprintf(stderr, "volume_csv: warning: %s\n", d.message.c_str());
 
         std::ofstream csv(argv[3]);
         csv << "vertex";

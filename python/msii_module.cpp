@@ -1,20 +1,18 @@
 /// @file msii_module.cpp
 /// @brief `import msii`: the engine for Python. Meshes come in and results go out as numpy
-/// arrays; msii.compute runs what `msii compute` runs (mesh preparation, then the
-/// invariants, mapped back to the input's vertices), so its values equal the CLI's bit for
-/// bit. The computation runs without the GIL; Ctrl-C cancels it (KeyboardInterrupt) through
-/// the engine's progress listener (core/progress.h), which also feeds `progress`.
+/// arrays; msii.compute runs the engine's pipeline, as `msii compute` does (pipeline/
+/// compute.h: mesh preparation, then the invariants, mapped back to the input's vertices),
+/// so its values equal the CLI's bit for bit. The computation runs without the GIL; Ctrl-C cancels it (KeyboardInterrupt) through
+/// the engine's progress listener (core/run_context.h), which also feeds `progress`.
 #include <msii/core/errors.h>
 #include <msii/core/run_context.h>
 #include <msii/core/version.h>
-#include <msii/invariants/compute.h>
-#include <msii/invariants/scales.h>
+#include <msii/pipeline/compute.h>
 #include <msii/io/write_ply.h>
-#include <msii/map/feature_map.h>
-#include <msii/map/map_frame.h>
-#include <msii/map/rasterize.h>
-#include <msii/mesh/prepare_mesh.h>
-#include <msii/mesh/read_mesh.h>
+#include <msii/featuremap/feature_map.h>
+#include <msii/featuremap/map_frame.h>
+#include <msii/featuremap/rasterize.h>
+#include <msii/io/read_mesh.h>
 #include <msii/metrics/feature_metrics.h>
 #include <msii/smoothing/ring_smoothing.h>
 
@@ -119,29 +117,7 @@ py::object featureArray(std::vector<std::vector<float>>& columns)
     return std::move(out);
 }
 
-struct Selection {
-    bool v = false, s = false, p = false, l = false;
-};
-
-Selection parseInvariants(const std::string& text)
-{
-    Selection sel;
-    for (const char c : text) {
-        switch (c) {
-        case 'V': case 'v': sel.v = true; break;
-        case 'S': case 's': sel.s = true; break;
-        case 'P': case 'p': sel.p = true; break;
-        case 'L': case 'l': sel.l = true; break;
-        case ',': case ' ': break;
-        default:
-            throw py::value_error("invariants must be letters of V, S, P and L (e.g. \"VS\"), not \"" + text + "\".");
-        }
-    }
-    if (!(sel.v || sel.s || sel.p || sel.l)) throw py::value_error("invariants names none of V, S, P and L.");
-    return sel;
-}
-
-py::object compute(const py::array& vertices, const py::array& faces, double radius, int scales,
+py::object computeArrays(const py::array& vertices, const py::array& faces, double radius, int scales,
                  const std::string& invariants, bool exact, int threads, const py::object& progress,
                  double memoryBudget, int tiles)
 {
@@ -149,15 +125,19 @@ py::object compute(const py::array& vertices, const py::array& faces, double rad
     if (!(radius > 0) || !std::isfinite(radius)) throw py::value_error("radius must be a positive number.");
     if (threads < 0) throw py::value_error("threads must be 0 (all cores) or more.");
     if (!(memoryBudget >= 0) || tiles < 0) throw py::value_error("memory_budget and tiles must be 0 or more.");
-    const Selection sel = parseInvariants(invariants);
+    ComputeOptions o;
+    o.invariants.radius = radius;
+    o.invariants.scales = scales;
+    o.invariants.select(parseInvariantList(invariants));
+    o.invariants.exact = exact;
+    o.tiling.memoryBudget = memoryBudget;
+    o.tiling.tilesPerAxis = tiles;
     const bool follow = !progress.is_none();
     if (follow && !PyCallable_Check(progress.ptr()))
         throw py::value_error("progress must be a callable (stage, done, total) or None.");
 
     PendingError pending;
-    InvariantsResult result;
-    PrepareMeshResult prepared;
-    std::vector<Diagnostic> diagnostics;  // what preparation changed, then the computation's remarks
+    ComputeResult result;
     {
         py::gil_scoped_release free;
         std::unique_ptr<tbb::global_control> limit;
@@ -179,29 +159,12 @@ py::object compute(const py::array& vertices, const py::array& faces, double rad
             }
         });
         try {
-            PrepareMeshOptions po;
-            po.maxHolePerimeter = defaultMaxHolePerimeter(radius);
-            po.radius = radius;
-            prepared = prepareMesh(mesh, po);
-            diagnostics = prepared.changes;
-            InvariantsOptions o;
-            o.radius = radius;
-            o.scales = scales;
-            o.computeVolume = sel.v, o.computeSphere = sel.s, o.computePatch = sel.p, o.computeLine = sel.l;
-            o.exact = exact;
-            o.memoryBudget = memoryBudget;
-            o.tilesPerAxis = tiles;
-            result = computeInvariants(prepared.mesh, o, &watch);
+            result = msii::compute(mesh, o, &watch);
         } catch (const Cancelled&) {
             py::gil_scoped_acquire hold;
             pending.restore();
             throw py::error_already_set();
-        } catch (const InvalidInputError& e) {
-            throw py::value_error(e.what());
         }
-        diagnostics.insert(diagnostics.end(), result.diagnostics.begin(), result.diagnostics.end());
-        for (FeatureColumns& columns : result.features.columns)
-            for (std::vector<float>& column : columns) column = toInputVertices(prepared, column);
     }
     py::dict out;
     for (Invariant i : kAllInvariants)
@@ -218,7 +181,7 @@ py::object compute(const py::array& vertices, const py::array& faces, double rad
     // figures (a dict of further numbers) and message.
     const py::object record = py::module_::import("types").attr("SimpleNamespace");
     py::list warnings;
-    for (const Diagnostic& d : diagnostics) {
+    for (const Diagnostic& d : result.diagnostics) {
         py::dict figures;
         for (const auto& [name, value] : d.figures) figures[name.c_str()] = value;
         warnings.append(record(py::arg("kind") = d.kind, py::arg("count") = d.count, py::arg("figures") = figures,
@@ -279,13 +242,7 @@ py::array_t<float> metric(const py::object& result, const std::string& name, con
     const MetricOptions options = metricOptionsByName(name, p);
     FeatureTable table;
     std::vector<py::array_t<float>> blocks;
-    const std::string letters = invariants.empty() ? "VSPL" : invariants;
-    for (const char c : letters) {
-        const Invariant inv = c == 'V' || c == 'v' ? Invariant::Volume
-                              : c == 'S' || c == 's' ? Invariant::Sphere
-                              : c == 'P' || c == 'p' ? Invariant::Patch
-                              : c == 'L' || c == 'l' ? Invariant::Line
-                                                     : throw py::value_error("invariants must be letters of V, S, P and L.");
+    for (const Invariant inv : parseInvariantList(invariants.empty() ? "VSPL" : invariants)) {
         const py::object a = py::getattr(result, std::string(1, invariantLetter(inv)).c_str(), py::none());
         if (a.is_none()) {
             if (invariants.empty()) continue;  // the result's own invariants
@@ -459,7 +416,7 @@ PYBIND11_MODULE(msii, m)
 
     m.def("read_mesh", &readMeshArrays, py::arg("path"),
           "Reads a PLY, OBJ, OFF or STL mesh: (vertices float64 (n, 3), faces int32 (m, 3)).");
-    m.def("compute", &compute, py::arg("vertices"), py::arg("faces"), py::arg("radius"), py::arg("scales") = 16,
+    m.def("compute", &computeArrays, py::arg("vertices"), py::arg("faces"), py::arg("radius"), py::arg("scales") = 16,
           py::arg("invariants") = "VSPL", py::arg("exact") = false, py::arg("threads") = 0,
           py::arg("progress") = py::none(), py::arg("memory_budget") = 0.0, py::arg("tiles") = 0,
           "The integral invariants at N = scales radii r_j = j*radius/N for every vertex, as msii compute "

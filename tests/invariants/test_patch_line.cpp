@@ -5,7 +5,7 @@
 // and max <= 1e-2. Where the method does not reach a bound, the test asserts a little above
 // what it gives (stated at the assertion), so that it still catches a loss of accuracy;
 // docs/accuracy.md gives the figures.
-#include <msii/invariants/compute.h>
+#include <msii/invariants/invariants.h>
 #include <msii/invariants/patch_line.h>
 #include <msii/invariants/volume_sphere.h>
 #include <msii/core/errors.h>

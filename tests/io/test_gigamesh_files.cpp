@@ -5,7 +5,7 @@
 #include <msii/core/errors.h>
 #include <msii/io/gigamesh_files.h>
 #include <msii/io/write_ply.h>
-#include <msii/mesh/read_ply.h>
+#include <msii/io/read_ply.h>
 
 #include <gtest/gtest.h>
 

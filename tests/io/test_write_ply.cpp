@@ -4,7 +4,7 @@
 #include <msii/core/errors.h>
 #include <msii/io/atomic_file.h>
 #include <msii/io/write_ply.h>
-#include <msii/mesh/read_ply.h>
+#include <msii/io/read_ply.h>
 
 #include <gtest/gtest.h>
 

@@ -4,7 +4,7 @@
 // surface stays a border; what cannot be repaired, and with repair off what would need
 // it, is refused with one sentence.
 #include <msii/core/errors.h>
-#include <msii/invariants/compute.h>
+#include <msii/invariants/invariants.h>
 #include <msii/mesh/mesh_stats.h>
 #include <msii/mesh/prepare_mesh.h>
 #include <msii/samples/generators.h>
@@ -379,7 +379,7 @@ void checkPinHoles(const TriMesh& intact, const char* title)
     po.radius = o.radius;
     const PrepareMeshResult whole = prepareMesh(intact, po);
     ASSERT_TRUE(whole.changes.empty());
-    const InvariantsResult plan = prepareComputation(whole.mesh, o);
+    const InvariantsResult plan = planInvariants(whole.mesh, o);
     o.voxelSize = plan.plan.voxelSize;  // the intact mesh's grid for both
     const Values want = computeOn(whole, o);
 

@@ -6,6 +6,7 @@
 #include <msii/samples/generators.h>
 #include <msii/mesh/mesh_check.h>
 #include <msii/mesh/mesh_stats.h>
+#include <msii/pipeline/compute.h>
 #include <msii/tiling/tiled_compute.h>
 
 #include <gtest/gtest.h>
@@ -15,12 +16,37 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
 using namespace msii;
 
 namespace {
+
+/// computeTiles with the tiles' values gathered into whole columns (NaN for vertices in no
+/// tile), as one result.
+InvariantsResult computeTiled(const TriMesh& mesh, const InvariantsOptions& options, const TilingOptions& tiling,
+                              TiledComputeInfo* info = nullptr)
+{
+    FeatureSet all;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    InvariantsResult result = computeTiles(
+        mesh, options, tiling,
+        [&](const TileResult& part) {
+            for (Invariant i : part.values.features.invariants()) {
+                FeatureColumns& to = all[i];
+                const FeatureColumns& from = part.values.features[i];
+                if (to.empty()) to.assign(from.size(), std::vector<float>(mesh.numVertices(), nan));
+                for (std::size_t j = 0; j < from.size(); ++j)
+                    for (std::size_t l = 0; l < part.vertices.size(); ++l) to[j][part.vertices[l]] = from[j][l];
+            }
+        },
+        info);
+    all.radii = result.plan.radii;
+    result.features = std::move(all);
+    return result;
+}
 
 /// Largest |tiled − untiled| over all features; NaN must match NaN. @p compared counts the
 /// pairs of numbers compared (NaN/NaN pairs are not), so that a check of nothing shows.
@@ -207,32 +233,59 @@ TEST(TiledCompute, ClosedSphereEqualsUntiled)
     const TiledAgainstWhole t = tiledAgainstWhole(mesh, co, 2);
     expectBitIdentical(t, "sphere " + std::to_string(mesh.numVertices()) + " vertices, 2 x 2 tiles");
     // A closed mesh: nothing is masked, tiled or not.
-    EXPECT_EQ(t.tiled.cost.maskedValues, 0u);
+    ComputeOptions tiled;
+    tiled.invariants = co;
+    tiled.tiling.tilesPerAxis = 2;
+    EXPECT_EQ(compute(mesh, tiled).masked.total(), 0u);
 }
 
-// The one entry point: computeInvariants with tilesPerAxis or a memory budget in its
-// options computes in tiles, with the values of one piece.
+// The one entry point: the pipeline (pipeline/compute.h) with tilesPerAxis or a memory
+// budget computes in tiles, with the values of one piece, and counts the masked values alike.
 TEST(TiledCompute, FrontDoorTilesEqualOnePiece)
 {
     const TriMesh mesh = tablet(10, 8, 0.12);
-    InvariantsOptions co;
-    co.radius = 1.0;
-    co.scales = 8;
-    const InvariantsResult whole = computeInvariants(mesh, co);
+    ComputeOptions co;
+    co.invariants.radius = 1.0;
+    co.invariants.scales = 8;
+    const ComputeResult whole = compute(mesh, co);
+    EXPECT_GT(whole.masked.total(), 0u);  // an open tablet: its rim is masked
     for (const bool byBudget : {false, true}) {
-        InvariantsOptions tiled = co;
-        if (byBudget) tiled.memoryBudget = 1e9;  // room for one tile: the budget route
-        else tiled.tilesPerAxis = 3;
-        const InvariantsResult parts = computeInvariants(mesh, tiled);
-        TiledAgainstWhole t;
-        t.tiled = parts;
-        t.diff = maxDifference(whole, parts, t.nanMismatches, &t.compared);
-        expectBitIdentical(t, byBudget ? "front door, memory budget 1 GB" : "front door, 3 x 3 tiles");
+        for (const bool streamed : {false, true}) {
+            ComputeOptions tiled = co;
+            if (byBudget) tiled.tiling.memoryBudget = 1e9;  // room for one tile: the budget route
+            else tiled.tiling.tilesPerAxis = 3;
+            InvariantsResult parts;
+            ComputeResult r;
+            if (streamed) {  // the pieces scattered back into whole columns
+                const float nan = std::numeric_limits<float>::quiet_NaN();
+                r = computeStreamed(mesh, tiled, [&](const ComputedPiece& piece) {
+                    for (Invariant i : piece.features.invariants()) {
+                        FeatureColumns& to = parts.features[i];
+                        if (to.empty()) to.assign(piece.features[i].size(), std::vector<float>(mesh.numVertices(), nan));
+                        for (std::size_t j = 0; j < to.size(); ++j)
+                            for (std::size_t k = 0; k < piece.vertices.size(); ++k)
+                                to[j][piece.vertices[k]] = piece.features[i][j][k];
+                    }
+                });
+                EXPECT_TRUE(r.features[Invariant::Volume].empty());
+            } else {
+                r = compute(mesh, tiled);
+                parts.features = r.features;
+            }
+            EXPECT_TRUE(r.tiled);
+            EXPECT_EQ(r.masked.total(), whole.masked.total());
+            InvariantsResult one;
+            one.features = whole.features;
+            TiledAgainstWhole t;
+            t.diff = maxDifference(one, parts, t.nanMismatches, &t.compared);
+            expectBitIdentical(t, std::string(byBudget ? "front door, memory budget 1 GB" : "front door, 3 x 3 tiles") +
+                                      (streamed ? ", streamed" : ""));
+        }
     }
-    InvariantsOptions exact = co;
-    exact.exact = true;
-    exact.tilesPerAxis = 2;
-    EXPECT_THROW(computeInvariants(mesh, exact), InvalidInputError);
+    ComputeOptions exact = co;
+    exact.invariants.exact = true;
+    exact.tiling.tilesPerAxis = 2;
+    EXPECT_THROW(compute(mesh, exact), InvalidInputError);
 }
 
 TEST(TiledCompute, TilesFromMemoryBudget)
@@ -243,7 +296,7 @@ TEST(TiledCompute, TilesFromMemoryBudget)
     co.computePatch = co.computeLine = false;  // quicker; V and S carry the tiling logic too
     TriMesh whole = mesh;
     const InvariantsResult untiled = computeInvariants(whole, co);
-    const double budget = 0.5 * kBytesPerTileVertex * double(mesh.numVertices());
+    const double budget = 0.5 * computationBytesPerVertex(co) * double(mesh.numVertices());
     TilingOptions to;
     to.memoryBudget = budget;
     TiledComputeInfo info;
@@ -290,7 +343,7 @@ TEST(TiledCompute, BudgetTooSmallForOneTile)
 // computeTiles (results handed over tile by tile, never held whole): every vertex arrives
 // exactly once, in ascending order within its tile, with the values of the untiled run; the
 // tiles' vertices are those of tileOfVertices; onlyTile hands over that tile alone; the
-// returned result has no feature columns but counts the masked values.
+// returned result has no feature columns.
 TEST(TiledCompute, TilesHandedToASinkCoverEveryVertexOnce)
 {
     TriMesh mesh = tablet();
@@ -333,7 +386,6 @@ TEST(TiledCompute, TilesHandedToASinkCoverEveryVertexOnce)
     EXPECT_EQ(wrongTile, 0u);
     EXPECT_EQ(mismatches, 0u);  // bit-identical
     EXPECT_TRUE(tiled.features[Invariant::Volume].empty());
-    EXPECT_EQ(tiled.cost.maskedValues, untiled.cost.maskedValues);
 
     to.onlyTile = 4;
     parts = 0;

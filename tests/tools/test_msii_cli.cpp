@@ -2,8 +2,8 @@
 // properties and a JSON record; every kind of bad input ends in one "msii: error:" line, a
 // non-zero exit and no output file.
 #include <msii/io/write_ply.h>
-#include <msii/map/feature_map.h>
-#include <msii/mesh/read_mesh.h>
+#include <msii/featuremap/feature_map.h>
+#include <msii/io/read_mesh.h>
 #include <msii/samples/generators.h>
 
 #include <gtest/gtest.h>

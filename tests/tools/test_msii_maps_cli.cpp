@@ -5,9 +5,9 @@
 // labels agree with the CSV table and the thresholded connectivity; the SVG outlines carry the
 // requested levels. Every kind of bad input ends in one "msii: error:" line, a non-zero exit
 // (2 for usage errors) and no output file; existing outputs are kept without --overwrite.
-#include <msii/map/feature_map.h>
-#include <msii/map/map_frame.h>
-#include <msii/mesh/read_mesh.h>
+#include <msii/featuremap/feature_map.h>
+#include <msii/featuremap/map_frame.h>
+#include <msii/io/read_mesh.h>
 #include <msii/outline/isolines.h>
 #include <msii/render/colormap.h>
 #include <msii/render/image.h>

@@ -1,8 +1,8 @@
 // msii compute on DEM rasters (docs/terrain.md): georeferenced GeoTIFF out on the input's
 // grid, the same values as the mesh path, nodata as holes, and bad rasters refused cleanly.
 #include <msii/io/write_ply.h>
-#include <msii/map/feature_map.h>
-#include <msii/mesh/read_mesh.h>
+#include <msii/featuremap/feature_map.h>
+#include <msii/io/read_mesh.h>
 #include <msii/samples/generators.h>
 #include <msii/terrain/dem.h>
 #include <msii/terrain/raster_output.h>

@@ -7,11 +7,11 @@
 /// (anisotropic triangles, 4× density variation, white noise of a tenth of an edge, long
 /// wall triangles, a thin sheet). With mesh files (and -r) it measures those: real scans.
 #include <msii/core/stopwatch.h>
-#include <msii/invariants/compute.h>
+#include <msii/invariants/invariants.h>
 #include <msii/invariants/scales.h>
 #include <msii/mesh/mesh_stats.h>
 #include <msii/mesh/prepare_mesh.h>
-#include <msii/mesh/read_mesh.h>
+#include <msii/io/read_mesh.h>
 #include <msii/samples/generators.h>
 
 #include <CLI/CLI.hpp>

@@ -12,7 +12,7 @@
 #include <msii/core/stopwatch.h>
 #include <msii/core/version.h>
 #include <msii/io/atomic_file.h>
-#include <msii/invariants/compute.h>
+#include <msii/invariants/invariants.h>
 #include <msii/invariants/exact.h>
 #include <msii/invariants/scales.h>
 #include <msii/io/feature_properties.h>
@@ -21,10 +21,10 @@
 #include <msii/smoothing/ring_smoothing.h>
 #include <msii/io/write_ply.h>
 #include <msii/mesh/prepare_mesh.h>
-#include <msii/mesh/read_mesh.h>
+#include <msii/io/read_mesh.h>
 #include <msii/samples/generators.h>
-#include <msii/map/feature_map.h>
-#include <msii/tiling/tiled_compute.h>
+#include <msii/featuremap/feature_map.h>
+#include <msii/pipeline/compute.h>
 #include <msii/render/annotate.h>
 #include <msii/render/typeface.h>
 #include <msii/render/picture.h>
@@ -321,7 +321,7 @@ int main(int argc, char** argv)
     std::size_t holesFilled = 0;
     std::size_t tiledLargest = 0, tiledDiffering = 0;
     const auto has = [&](char c) { return invariants.find(c) != std::string::npos; };
-    InvariantsResult last;
+    ComputeResult last;
     TriMesh lastMesh;
     std::size_t nv = 0;
     for (int run = 0; run < runs; ++run) {
@@ -339,17 +339,15 @@ int main(int argc, char** argv)
         o.computeSphere = has('S');
         o.computePatch = has('P');
         o.computeLine = has('L');
-        // Mesh preparation as msii compute does it (checks, repair, holes), on the clean
-        // tablet; then, not counted in the total, on the same tablet with 100 pin-holes.
-        PrepareMeshOptions po;
-        po.maxHolePerimeter = defaultMaxHolePerimeter(radius);
-        po.radius = radius;
-        const Stopwatch preparing;
-        const PrepareMeshResult prepared = prepareMesh(mesh, po);
-        prepare.push_back(preparing.seconds());
-        last = computeInvariants(prepared.mesh, o);
+        // The pipeline as msii compute runs it (preparation: checks, repair, holes; the
+        // invariants; the values mapped to the input's vertices), on the clean tablet; then
+        // preparation alone, not counted in the total, on the same tablet with 100 pin-holes.
+        ComputeOptions co;
+        co.invariants = o;
+        last = msii::compute(mesh, co);
+        prepare.push_back(last.preparation.seconds);
         const Stopwatch writing;
-        writePly(output, mesh, featureProperties(last.features));
+        writePly(output, mesh, outputProperties(last.features, last.filledShare));
         write.push_back(writing.seconds());
         total.push_back(wall.seconds());
         check.push_back(last.cost.check);
@@ -361,13 +359,12 @@ int main(int argc, char** argv)
         pl.push_back(last.cost.patchLine);
         compute.push_back(last.cost.total);
         if (tiles > 0) {
-            TilingOptions to;
-            to.tilesPerAxis = tiles;
-            TiledComputeInfo info;
+            ComputeOptions tco = co;
+            tco.tiling.tilesPerAxis = tiles;
             const Stopwatch tiledWall;
-            const InvariantsResult t = computeTiled(mesh, o, to, &info);
+            const ComputeResult t = msii::compute(mesh, tco);
             tiled.push_back(tiledWall.seconds());
-            tiledLargest = info.largestTileVertices;
+            tiledLargest = t.tiling.largestTileVertices;
             // Checked, not assumed: every value against the untiled run, bit for bit.
             const auto differing = [](const std::vector<std::vector<float>>& a, const std::vector<std::vector<float>>& b) {
                 std::size_t count = 0;
@@ -387,6 +384,9 @@ int main(int argc, char** argv)
             holes.maxSize = spacing;
             samples::punchHoles(holed, holes);
             const Stopwatch preparing;
+            PrepareMeshOptions po;
+            po.maxHolePerimeter = defaultMaxHolePerimeter(radius);
+            po.radius = radius;
             holesFilled = prepareMesh(holed, po).holes.numFilled;
             prepareHoles.push_back(preparing.seconds());
         }

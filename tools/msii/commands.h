@@ -5,10 +5,28 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <tbb/global_control.h>
 
 namespace msii::tools {
+
+/// What every command takes (addCommonOptions): -j/--threads, -q/--quiet, --overwrite, and,
+/// for the commands that write a PLY, --property-names (addPropertyNamesOption).
+struct CommonArgs {
+    int threads = 0;             ///< 0 = all cores
+    bool quiet = false;          ///< no progress line, no summary; errors only
+    bool overwrite = false;      ///< replace existing outputs
+    std::string propertyPrefix;  ///< --property-names: "" or "scalar_"
+};
+
+/// Registers -j/--threads, -q/--quiet and --overwrite on @p cmd, into @p args.
+void addCommonOptions(CLI::App* cmd, CommonArgs& args);
+
+/// Checks that each of @p paths may be written: it does not exist yet, or @p overwrite is
+/// set, and its folder is writable.
+/// @throw IOError naming the path (and --overwrite where it exists).
+void checkOutputs(const std::vector<std::string>& paths, bool overwrite);
 
 /// --threads N: 0 = all cores (null), else a TBB limit held for the returned object's life.
 /// @throw InvalidInputError if N < 0.

@@ -4,11 +4,11 @@
 /// compute_command.cpp (the options and one input's run) and compute_collection.cpp
 /// (folders and several inputs: skipping, resuming, the manifest).
 
+#include "commands.h"
+
 #include <msii/core/diagnostics.h>
-#include <msii/invariants/compute.h>
-#include <msii/mesh/prepare_mesh.h>
-#include <msii/mesh/read_mesh.h>
-#include <msii/tiling/tiled_compute.h>
+#include <msii/io/read_mesh.h>
+#include <msii/pipeline/compute.h>
 
 #include <nlohmann/json.hpp>
 
@@ -19,7 +19,7 @@
 
 namespace msii::tools {
 
-struct ComputeArgs {
+struct ComputeArgs : CommonArgs {
     std::vector<std::string> inputs;
     std::string output, outputDir;
     double radius = 0;
@@ -27,10 +27,8 @@ struct ComputeArgs {
     double voxelSize = 0;
     double precision = 6.0;
     double plPrecision = 0;  // 0 = 4/3 of precision (the engine's default)
-    std::string propertyPrefix;  // --property-names
     std::string units;           // --units: the mesh's units, recorded for pictures (empty: unstated)
-    int threads = 0;
-    bool quiet = false, overwrite = false, repair = false, strict = false, noSphere = false;
+    bool repair = false, strict = false, noSphere = false;
     double fillHoles = -1;      // longest hole border filled; -1 = pi R (default), 0 = none
     std::string invariants = "V,S,P,L";
     bool exact = false;
@@ -56,15 +54,16 @@ struct OneResult {
     double voxelSize = 0, seconds = 0;
 };
 
-struct Selection {
-    bool volume = false, sphere = false, patch = false, line = false;
-};
-
 /// The P and L precision the engine uses for these arguments (0 = its automatic choice).
 double plPrecisionOf(const ComputeArgs& args);
 
-/// "V,S,P,L" (any order, case, subset) to a selection; --no-sphere removes S.
-Selection parseInvariants(const ComputeArgs& args);
+/// The invariants of --invariants ("V,S,P,L", "VSPL", any case, subset: parseInvariantList);
+/// --no-sphere removes S. @throw InvalidInputError naming --invariants.
+std::vector<Invariant> invariantsOf(const ComputeArgs& args);
+
+/// The pipeline's options for these arguments, for meshes and rasters alike.
+/// @throw InvalidInputError for unusable arguments, naming the option.
+ComputeOptions computeOptionsOf(const ComputeArgs& args);
 
 /// Where the result of @p input goes: --output for a single input, else
 /// <output-dir or input's folder>/<stem>.msii.ply
@@ -80,9 +79,6 @@ bool isRasterInput(const std::string& input);
 /// "8G", "500M", "8GB", "2.5e9" (bytes) to bytes; empty = 0 (no limit).
 double parseBytes(const std::string& text);
 
-/// The engine's options for these arguments and selection.
-void setInvariantsOptions(const ComputeArgs& args, const Selection& sel, InvariantsOptions& options);
-
 /// A diagnostic as `msii compute` prints it: the engine's sentence, plus the option that
 /// changes what it is about.
 std::string worded(const Diagnostic& d);
@@ -92,15 +88,9 @@ struct MeshRunRecord {
     const ComputeArgs& args;
     const std::string &input, &output;
     const ReadMeshResult& read;
-    std::size_t inputFaces;
-    const PrepareMeshOptions& prepareOptions;
-    const PrepareMeshResult& prepared;
-    const InvariantsOptions& options;
-    const InvariantsResult& result;
-    const std::string &letters, &qualityName;  ///< e.g. "VSPL", "V_16"
-    double readSeconds, prepareSeconds, writeSeconds, totalSeconds;
-    bool tiled;
-    const TiledComputeInfo& tiledInfo;
+    const ComputeOptions& options;
+    const ComputeResult& result;
+    double readSeconds, writeSeconds, totalSeconds;
 };
 nlohmann::json runRecord(const MeshRunRecord& record);
 /// The `parameters` of a JSON record, mesh or raster (@p letters: the invariants, e.g. "VS").
@@ -110,7 +100,7 @@ nlohmann::json parametersRecord(const ComputeArgs& args, const ScalePlan& plan, 
 /// This process's peak resident memory so far, bytes (0 if unknown).
 double peakMemoryBytes();
 /// Adds `diagnostics` (coded) and `warnings` (as printed) to a JSON record.
-void addDiagnostics(nlohmann::json& record, const std::vector<const std::vector<Diagnostic>*>& lists);
+void addDiagnostics(nlohmann::json& record, const std::vector<Diagnostic>& diagnostics);
 
 /// One raster input (DEM): read through GDAL, triangulate, prepare, compute, write the
 /// chosen features as a GeoTIFF on the input's grid and its JSON record (docs/terrain.md).

@@ -96,11 +96,9 @@ std::string differentParameters(const std::string& sidecar, const ComputeArgs& a
         if ((p.at("mode").get<std::string>() == "exact") != args.exact) differs += (differs.empty() ? "" : ", ") + std::string("mode");
         std::string had;
         for (const auto& c : p.at("invariants")) had += c.get<std::string>();
-        std::string want;
-        const Selection sel = parseInvariants(args);
-        for (const auto& [on, c] : {std::pair{sel.volume, 'V'}, std::pair{sel.sphere, 'S'}, std::pair{sel.patch, 'P'},
-                                    std::pair{sel.line, 'L'}})
-            if (on) want += c;
+        InvariantsOptions wanted;
+        wanted.select(invariantsOf(args));
+        const std::string want = invariantLetters(wanted.selected());
         if (had != want) differs += (differs.empty() ? "" : ", ") + std::string("invariants ") + had + " instead of " + want;
         return differs;
     } catch (const std::exception&) {

@@ -1,38 +1,32 @@
 /// `msii compute INPUT... --radius R [--scales N] [--output OUT.ply]`: V, S, P and L per
-/// vertex (or the chosen ones), fast or exact; optionally GigaMesh-compatible files too.
+/// vertex (or the chosen ones), fast or exact; optionally GigaMesh-compatible files too. The
+/// work is the engine's pipeline (pipeline/compute.h); this file reads, words and writes.
 #include "commands.h"
 #include "compute_args.h"
 
-#include <msii/core/terminal_progress.h>
 #include <msii/core/errors.h>
 #include <msii/core/run_context.h>
 #include <msii/core/stopwatch.h>
+#include <msii/core/terminal_progress.h>
 #include <msii/core/version.h>
-#include <msii/invariants/compute.h>
 #include <msii/io/atomic_file.h>
 #include <msii/io/feature_properties.h>
 #include <msii/io/gigamesh_files.h>
+#include <msii/io/read_mesh.h>
 #include <msii/io/write_ply.h>
 #include <msii/mesh/mesh_stats.h>
-#include <msii/mesh/prepare_mesh.h>
-#include <msii/mesh/read_mesh.h>
 #include <msii/terrain/dem.h>
-#include <msii/tiling/tiled_compute.h>
 
 #include <nlohmann/json.hpp>
-#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cctype>
-#include <ctime>
-#include <iomanip>
 #include <cmath>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
-#include <fstream>
+#include <iomanip>
 #include <limits>
-#include <map>
 #include <memory>
 #include <random>
 #include <sstream>
@@ -40,8 +34,6 @@
 namespace fs = std::filesystem;
 
 namespace msii::tools {
-
-
 
 double plPrecisionOf(const ComputeArgs& args)
 {
@@ -51,29 +43,42 @@ double plPrecisionOf(const ComputeArgs& args)
     return patchLinePrecision(o);
 }
 
-
-
-Selection parseInvariants(const ComputeArgs& args)
+std::vector<Invariant> invariantsOf(const ComputeArgs& args)
 {
-    Selection sel;
-    std::stringstream in(args.invariants);
-    std::string item;
-    while (std::getline(in, item, ',')) {
-        item.erase(0, item.find_first_not_of(" \t"));
-        item.erase(item.find_last_not_of(" \t") + 1);
-        if (item.empty()) continue;
-        if (item == "V" || item == "v") sel.volume = true;
-        else if (item == "S" || item == "s") sel.sphere = true;
-        else if (item == "P" || item == "p") sel.patch = true;
-        else if (item == "L" || item == "l") sel.line = true;
-        else
-            throw InvalidInputError("unknown invariant '" + item +
-                                    "' in --invariants (use any of V, S, P, L, comma-separated)");
+    std::vector<Invariant> list;
+    try {
+        list = parseInvariantList(args.invariants);
+    } catch (const InvalidInputError& e) {
+        throw InvalidInputError(std::string("--invariants: ") + e.what());
     }
-    if (args.noSphere) sel.sphere = false;
-    if (!sel.volume && !sel.sphere && !sel.patch && !sel.line)
-        throw InvalidInputError("--invariants selects nothing (use any of V, S, P, L)");
-    return sel;
+    if (args.noSphere) list.erase(std::remove(list.begin(), list.end(), Invariant::Sphere), list.end());
+    if (list.empty()) throw InvalidInputError("--invariants selects nothing but S, which --no-sphere leaves out");
+    return list;
+}
+
+ComputeOptions computeOptionsOf(const ComputeArgs& args)
+{
+    if (args.tile >= 0 && args.tiles <= 0) throw InvalidInputError("--tile I goes with --tiles K (tiles 0 to K*K-1)");
+    if (args.tile < -1) throw InvalidInputError("--tile must be 0 or more");
+    ComputeOptions o;
+    InvariantsOptions& inv = o.invariants;
+    inv.radius = args.radius;
+    inv.scales = args.scales;
+    inv.voxelSize = args.voxelSize;
+    inv.minVoxelsPerRadius = args.precision;
+    inv.patchLinePrecision = args.plPrecision;
+    inv.select(invariantsOf(args));
+    inv.exact = args.exact;
+    o.repair = !args.strict;
+    o.maxHolePerimeter = args.fillHoles;
+    o.tiling.memoryBudget = parseBytes(args.memoryBudget);
+    if (!args.exact) {  // the exact mode is computed whole (at chosen vertices)
+        o.tiling.tilesPerAxis = args.tiles;
+        o.tiling.onlyTile = args.tile;
+    } else {
+        o.tiling.memoryBudget = 0;
+    }
+    return o;
 }
 
 namespace {
@@ -124,42 +129,142 @@ std::vector<std::uint32_t> exactVertices(const ComputeArgs& args, std::size_t nu
 
 /// GigaMesh-compatible outputs next to @p output: <stem>_r.._n.._v...volume.mat (V),
 /// .surface.mat (P) and <stem>.gigamesh.ply (V, else P).
-std::vector<std::string> gigameshPaths(const ComputeArgs& args, const std::string& input,
-                                       const std::string& output, const Selection& sel)
+std::vector<std::string> gigameshPaths(const ComputeArgs& args, const std::string& input, const std::string& output,
+                                       const InvariantsOptions& options)
 {
     const fs::path dir = fs::path(output).parent_path();
     const std::string stem = fs::path(input).stem().string();
     const int precision = int(std::lround(args.precision));
     std::vector<std::string> paths;
-    if (sel.volume)
-        paths.push_back((dir / gigaMeshMatFileName(stem, args.radius, args.scales, precision,
-                                                    GigaMeshInvariant::Volume)).string());
-    if (sel.patch)
-        paths.push_back((dir / gigaMeshMatFileName(stem, args.radius, args.scales, precision,
-                                                    GigaMeshInvariant::Patch)).string());
+    if (options.computeVolume)
+        paths.push_back(
+            (dir / gigaMeshMatFileName(stem, args.radius, args.scales, precision, GigaMeshInvariant::Volume)).string());
+    if (options.computePatch)
+        paths.push_back(
+            (dir / gigaMeshMatFileName(stem, args.radius, args.scales, precision, GigaMeshInvariant::Patch)).string());
     paths.push_back((dir / (stem + ".gigamesh.ply")).string());
     return paths;
 }
 
-} // namespace
-
-std::string outputPathFor(const ComputeArgs& args, const std::string& input)
+/// Writes the GigaMesh-compatible files: V and P as .mat, and a PLY with V's (else P's)
+/// feature vectors.
+void writeGigaMeshFiles(const ComputeArgs& args, const std::string& input, const std::vector<std::string>& paths,
+                        const TriMesh& mesh, const ComputeResult& result)
 {
-    const bool raster = isRasterInput(input);
-    if (raster && !args.rasterOutput.empty()) return args.rasterOutput;
-    if (!args.output.empty()) return args.output;
-    const fs::path in(input);
-    const fs::path dir = args.outputDir.empty() ? in.parent_path() : fs::path(args.outputDir);
-    return (dir / (in.stem().string() + (raster ? ".msii.tif" : ".msii.ply"))).string();
+    const FeatureSet& features = result.features;
+    GigaMeshMatInfo info;
+    info.inputFile = fs::absolute(input).string();
+    info.largestRadius = args.radius;
+    info.radii = result.plan.radii;
+    info.notes = {"msii voxel size " + std::to_string(result.plan.voxelSize) + ", precision " +
+                  std::to_string(args.precision) + (args.exact ? ", exact mode" : "")};
+    std::size_t k = 0;
+    GigaMeshRows plyRows;
+    const bool volume = features.has(Invariant::Volume);
+    if (volume) {
+        info.invariant = GigaMeshInvariant::Volume;
+        plyRows = toGigaMeshRows(features[Invariant::Volume], GigaMeshInvariant::Volume);
+        writeGigaMeshMat(paths[k++], gigaMeshMatHeader(info), plyRows);
+    }
+    if (features.has(Invariant::Patch)) {
+        info.invariant = GigaMeshInvariant::Patch;
+        const GigaMeshRows rows = toGigaMeshRows(features[Invariant::Patch], GigaMeshInvariant::Patch);
+        writeGigaMeshMat(paths[k++], gigaMeshMatHeader(info), rows);
+        if (!volume) plyRows = rows;
+    }
+    GigaMeshPlyOptions gmOptions;
+    gmOptions.comments.push_back(std::string("msii ") + versionString() + ": feature_vector = " +
+                                 (volume ? "2 " + invariantFormula(Invariant::Volume) + " - 1"
+                                         : invariantFormula(Invariant::Patch)) +
+                                 ", largest radius first; quality = largest element");
+    writeGigaMeshPly(paths[k], mesh, plyRows, gmOptions);
 }
 
-std::string sidecarPathFor(const std::string& plyPath)
-{
-    fs::path p(plyPath);
-    return p.replace_extension(".json").string();
-}
+/// The feature PLY of one mesh input: the input's mesh with the output properties, written
+/// whole, or piece by piece as tiles are computed.
+class FeaturePly {
+public:
+    FeaturePly(const ComputeArgs& args, const std::string& path, const TriMesh& mesh)
+        : mArgs(args), mPath(path), mMesh(mesh)
+    {
+    }
 
-namespace {
+    /// The values of some vertices (computeStreamed's sink).
+    void piece(const ComputedPiece& piece)
+    {
+        const Stopwatch watch;
+        const std::vector<VertexProperty> props = outputProperties(piece.features, piece.filledShare);
+        if (!mPieces) {
+            // Vertices in no piece (in no face) get NaN features, quality's stand-in and
+            // valid_radii 0, as in writePly's output.
+            const float standIn = qualityStandIn(piece.features);
+            std::vector<PlyColumn> names;
+            for (const VertexProperty& p : props)
+                names.push_back({p.name, p.integer,
+                                 p.integer ? 0.0f : p.name == "quality" ? standIn : std::numeric_limits<float>::quiet_NaN()});
+            mPieces = std::make_unique<PlyPieceWriter>(mPath, mMesh, names, optionsFor(piece.features, piece.plan));
+        }
+        std::vector<const float*> columns;
+        for (const VertexProperty& p : props) columns.push_back(p.values.data());
+        if (!piece.vertices.empty()) mPieces->write(piece.vertices, columns);
+        seconds += watch.seconds();
+    }
+
+    /// Writes the whole result, or finishes what the pieces wrote.
+    void finish(const ComputeResult& result)
+    {
+        const Stopwatch watch;
+        if (mPieces) mPieces->commit();
+        else writePly(mPath, mMesh, outputProperties(result.features, result.filledShare), optionsFor(result.features, result.plan));
+        seconds += watch.seconds();
+    }
+
+    double seconds = 0;  ///< spent writing
+
+private:
+    /// The header's comments: the run, the legend of the features, units, the tile.
+    WritePlyOptions optionsFor(const FeatureSet& features, const ScalePlan& plan) const
+    {
+        WritePlyOptions o;
+        std::ostringstream comment;
+        comment << "msii " << versionString() << " compute" << (mArgs.exact ? " --exact" : "") << " R=" << mArgs.radius
+                << " N=" << plan.radii.size() << " voxel=" << plan.voxelSize << "; " << featureLegend()
+                << "; NaN = ball reaches the border" << (mArgs.exact ? " or vertex not computed" : "")
+                << "; quality = " << qualitySource(features).substr(0, 1)
+                << " at the largest radius with a value (a plane's value if none), valid_radii = how many "
+                   "radii have one";
+        o.comments.push_back(comment.str());
+        if (!mArgs.units.empty()) o.comments.push_back("units " + mArgs.units);  // read by render and map
+        o.propertyPrefix = mArgs.propertyPrefix;
+        if (mArgs.tile >= 0)  // read by msii merge
+            o.comments.push_back("msii tile " + std::to_string(mArgs.tile) + " of " + std::to_string(mArgs.tiles) + " x " +
+                                 std::to_string(mArgs.tiles) + " (other vertices NaN; msii merge joins the tiles)");
+        return o;
+    }
+
+    const ComputeArgs& mArgs;
+    std::string mPath;
+    const TriMesh& mMesh;
+    std::unique_ptr<PlyPieceWriter> mPieces;
+};
+
+/// The pipeline on one mesh as read, its errors named after the file; the PLY gets the
+/// values piece by piece when tiled without GigaMesh files (which need all columns at once),
+/// so that neither the values nor the file are held whole.
+ComputeResult runPipeline(const ComputeArgs& args, const std::string& input, const TriMesh& mesh,
+                          const ComputeOptions& options, FeaturePly& ply, RunContext& progress)
+{
+    try {
+        if (options.tiling.tiled() && !args.gigamesh)
+            return computeStreamed(mesh, options, [&](const ComputedPiece& p) { ply.piece(p); }, &progress);
+        return compute(mesh, options, &progress);
+    } catch (const InvalidInputError& e) {
+        const std::string hint = args.strict && std::string(e.what()).find("repair is off") != std::string::npos
+                                     ? " (--strict; without it msii repairs this)"
+                                     : "";
+        throw InvalidInputError(fs::path(input).filename().string() + ": " + e.what() + hint);
+    }
+}
 
 /// A suggestion for R when none is given: about 30 median edges (a typical feature size for
 /// scans at their native resolution), capped by a tenth of the bounding-box diagonal.
@@ -181,7 +286,24 @@ std::string radiusHint(const std::string& input)
 }
 
 
+
 } // namespace
+
+std::string outputPathFor(const ComputeArgs& args, const std::string& input)
+{
+    const bool raster = isRasterInput(input);
+    if (raster && !args.rasterOutput.empty()) return args.rasterOutput;
+    if (!args.output.empty()) return args.output;
+    const fs::path in(input);
+    const fs::path dir = args.outputDir.empty() ? in.parent_path() : fs::path(args.outputDir);
+    return (dir / (in.stem().string() + (raster ? ".msii.tif" : ".msii.ply"))).string();
+}
+
+std::string sidecarPathFor(const std::string& plyPath)
+{
+    fs::path p(plyPath);
+    return p.replace_extension(".json").string();
+}
 
 std::string worded(const Diagnostic& d)
 {
@@ -210,20 +332,6 @@ double parseBytes(const std::string& text)
     return value * scale;
 }
 
-void setInvariantsOptions(const ComputeArgs& args, const Selection& sel, InvariantsOptions& options)
-{
-    options.radius = args.radius;
-    options.scales = args.scales;
-    options.voxelSize = args.voxelSize;
-    options.minVoxelsPerRadius = args.precision;
-    options.patchLinePrecision = args.plPrecision;
-    options.computeVolume = sel.volume;
-    options.computeSphere = sel.sphere;
-    options.computePatch = sel.patch;
-    options.computeLine = sel.line;
-    options.exact = args.exact;
-}
-
 bool isRasterInput(const std::string& input)
 {
     std::string ext = fs::path(input).extension().string();
@@ -236,232 +344,46 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
 {
     if (isRasterInput(input)) return computeRasterOne(args, input, output);
     const Stopwatch total;
-    const std::string sidecar = sidecarPathFor(output);
-    const Selection sel = parseInvariants(args);
-    if (args.gigamesh && !sel.volume && !sel.patch)
+    ComputeOptions options = computeOptionsOf(args);
+    if (args.gigamesh && !options.invariants.computeVolume && !options.invariants.computePatch)
         throw InvalidInputError("--gigamesh writes V and P; select at least one of them");
+    const std::string sidecar = sidecarPathFor(output);
     const std::vector<std::string> gigameshFiles =
-        args.gigamesh ? gigameshPaths(args, input, output, sel) : std::vector<std::string>{};
+        args.gigamesh ? gigameshPaths(args, input, output, options.invariants) : std::vector<std::string>{};
     std::vector<std::string> outputs{output, sidecar};
     outputs.insert(outputs.end(), gigameshFiles.begin(), gigameshFiles.end());
-    for (const auto& path : outputs) {
-        if (!args.overwrite && fs::exists(path))
-            throw IOError("'" + path + "' exists already (use --overwrite to replace it)");
-        checkWritable(path);
-    }
+    checkOutputs(outputs, args.overwrite);
 
     TerminalProgress terminal(!args.quiet && stderrIsTerminal());
     RunContext progress(terminal.listener());
-    ReadMeshResult read = readMesh(input);
+    const ReadMeshResult read = readMesh(input);
     const double readSeconds = total.seconds();
-    const std::size_t inputFaces = read.mesh.numTriangles();
-
-    // Mesh preparation: repair, holes. The computation runs on the prepared mesh; every
-    // column is mapped back to the input's vertices before it is written.
-    const Stopwatch prepareWatch;
-    PrepareMeshOptions prepareOptions;
-    prepareOptions.repair = !args.strict;
-    prepareOptions.maxHolePerimeter = args.fillHoles >= 0 ? args.fillHoles : defaultMaxHolePerimeter(args.radius);
-    prepareOptions.radius = args.radius;
-    PrepareMeshResult prepared;
-    try {
-        prepared = prepareMesh(read.mesh, prepareOptions);
-    } catch (const InvalidInputError& e) {
-        const std::string hint = args.strict && std::string(e.what()).find("repair is off") != std::string::npos
-                                     ? " (--strict; without it msii repairs this)"
-                                     : "";
-        throw InvalidInputError(fs::path(input).filename().string() + ": " + e.what() + hint);
-    }
-    const double prepareSeconds = prepareWatch.seconds();
-    if (!args.quiet)
-        for (const Diagnostic& c : prepared.changes)
-            std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), worded(c).c_str());
-    const std::vector<float>& filledShare = prepared.filledShare;  // radius given: one per vertex
-
-    InvariantsOptions options;
-    setInvariantsOptions(args, sel, options);
+    if (!args.exact && (!args.vertices.empty() || args.randomVertices > 0))
+        throw InvalidInputError("--vertices and --random-vertices go with --exact");
     if (args.exact) {
-        // Input vertex numbers to the prepared mesh's.
-        for (std::uint32_t v : exactVertices(args, read.mesh.numVertices())) {
-            if (prepared.preparedOf[v] == PrepareMeshResult::kNoVertex)
-                throw InvalidInputError("--vertices: vertex " + std::to_string(v) + " belongs to no face");
-            options.exactVertices.push_back(prepared.preparedOf[v]);
-        }
-        if (options.exactVertices.empty() && read.mesh.numVertices() > 20000 && !args.quiet)
+        options.invariants.exactVertices = exactVertices(args, read.mesh.numVertices());
+        if (options.invariants.exactVertices.empty() && read.mesh.numVertices() > 20000 && !args.quiet)
             std::fprintf(stderr,
                          "msii: warning: %s: exact mode on all %zu vertices is slow; "
                          "--vertices or --random-vertices restrict it\n",
                          input.c_str(), read.mesh.numVertices());
-    } else if (!args.vertices.empty() || args.randomVertices > 0) {
-        throw InvalidInputError("--vertices and --random-vertices go with --exact");
     }
-    InvariantsResult result;
-    TiledComputeInfo tiledInfo;
-    const bool tiled = !args.exact && (!args.memoryBudget.empty() || args.tiles > 0);
-    if (args.tile >= 0 && args.tiles <= 0) throw InvalidInputError("--tile I goes with --tiles K (tiles 0 to K*K-1)");
-    if (args.tile < -1) throw InvalidInputError("--tile must be 0 or more");
-
-    // The PLY's header comments, from a result (the whole one or a tile's: same plan).
-    std::string qualityName;  // e.g. "V_16"
-    const auto plyOptionsFor = [&](const InvariantsResult& r) {
-        qualityName = qualitySource(r.features);
-        WritePlyOptions plyOptions;
-        std::ostringstream comment;
-        comment << "msii " << versionString() << " compute" << (args.exact ? " --exact" : "")
-                << " R=" << args.radius << " N=" << r.plan.radii.size() << " voxel=" << r.plan.voxelSize
-                << "; V_jj = V/|B_r|, S_jj = S/(4 pi r^2) (plane 0.5), P_jj = P/(pi r^2), L_jj = "
-                   "L/(2 pi r) (plane 1), r_j = j*R/N; NaN = ball reaches the border"
-                << (args.exact ? " or vertex not computed" : "") << "; quality = " << qualityName.substr(0, 1)
-                << " at the largest radius with a value (a plane's value if none), valid_radii = how many "
-                   "radii have one";
-        plyOptions.comments.push_back(comment.str());
-        if (!args.units.empty()) plyOptions.comments.push_back("units " + args.units);  // read by render and map
-        plyOptions.propertyPrefix = args.propertyPrefix;
-        if (args.tile >= 0)  // read by msii merge
-            plyOptions.comments.push_back("msii tile " + std::to_string(args.tile) + " of " +
-                                          std::to_string(args.tiles) + " x " + std::to_string(args.tiles) +
-                                          " (other vertices NaN; msii merge joins the tiles)");
-        return plyOptions;
-    };
-    // Tiled (without GigaMesh files, which need all columns at once): each tile's values go
-    // straight into the output file, so neither the results nor the file are held whole.
-    const bool streamed = tiled && !args.gigamesh;
-    std::unique_ptr<PlyPieceWriter> pieces;
-    double writeSeconds = 0;
-    try {
-        if (tiled) {
-            TilingOptions tilingOptions;
-            tilingOptions.memoryBudget = parseBytes(args.memoryBudget);
-            tilingOptions.tilesPerAxis = args.tiles;
-            tilingOptions.onlyTile = args.tile;
-            if (streamed) {
-                // Each prepared vertex of a tile goes to its input vertices (several where
-                // positions were merged; none for hole-filling vertices).
-                const InputVertexLists inputsOf = inputVerticesOf(prepared);
-                const auto sink = [&](const TileResult& part) {
-                    const Stopwatch write;
-                    std::vector<VertexProperty> props = featureProperties(part.values.features);
-                    std::vector<std::uint32_t> vertices;
-                    std::vector<std::uint32_t> rows;  // row of part.vertices for each input vertex
-                    for (std::size_t l = 0; l < part.vertices.size(); ++l)
-                        for (std::size_t k = inputsOf.offsets[part.vertices[l]]; k < inputsOf.offsets[part.vertices[l] + 1]; ++k) {
-                            vertices.push_back(inputsOf.inputs[k]);
-                            rows.push_back(std::uint32_t(l));
-                        }
-                    std::vector<float> share(part.vertices.size());
-                    for (std::size_t l = 0; l < part.vertices.size(); ++l) share[l] = filledShare[part.vertices[l]];
-                    props.push_back({"filled_share", std::move(share)});
-                    for (VertexProperty& p : props) {  // (keeps p.integer)
-                        std::vector<float> expanded(rows.size());
-                        for (std::size_t i = 0; i < rows.size(); ++i) expanded[i] = p.values[rows[i]];
-                        p.values.swap(expanded);
-                    }
-                    std::vector<const float*> columns;
-                    for (const VertexProperty& p : props) columns.push_back(p.values.data());
-                    if (!pieces) {
-                        // Vertices in no tile (in no face) get NaN features, quality's stand-in
-                        // and valid_radii 0, as in writePly's output.
-                        const float standIn = qualityStandIn(part.values.features);
-                        std::vector<PlyColumn> names;
-                        for (const VertexProperty& p : props)
-                            names.push_back({p.name, p.integer,
-                                             p.integer                ? 0.0f
-                                             : p.name == "quality"    ? standIn
-                                                                      : std::numeric_limits<float>::quiet_NaN()});
-                        pieces = std::make_unique<PlyPieceWriter>(output, read.mesh, names, plyOptionsFor(part.values));
-                    }
-                    if (!vertices.empty()) pieces->write(vertices, columns);
-                    writeSeconds += write.seconds();
-                };
-                result = computeTiles(prepared.mesh, options, tilingOptions, sink, &tiledInfo, &progress);
-            } else {
-                result = computeTiled(prepared.mesh, options, tilingOptions, &tiledInfo, &progress);
-            }
-        } else {
-            result = computeInvariants(prepared.mesh, options, &progress);
-        }
-        if (!streamed) {
-            for (FeatureColumns& columns : result.features.columns)
-                for (std::vector<float>& column : columns) column = toInputVertices(prepared, column);
-        }
-    } catch (const InvalidInputError& e) {
-        throw InvalidInputError(fs::path(input).filename().string() + ": " + e.what());
-    }
+    FeaturePly ply(args, output, read.mesh);
+    const ComputeResult result = runPipeline(args, input, read.mesh, options, ply, progress);
     if (!args.quiet)
         for (const Diagnostic& d : result.diagnostics)
             std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), worded(d).c_str());
-
-    const FeatureSet& features = result.features;
-    const ScalePlan& plan = result.plan;
-    std::string letters;
-    for (const auto& [on, c] : {std::pair{sel.volume, 'V'}, std::pair{sel.sphere, 'S'},
-                                std::pair{sel.patch, 'P'}, std::pair{sel.line, 'L'}})
-        if (on) letters += c;
-
+    ply.finish(result);
     const Stopwatch write;
-    if (streamed) {
-        pieces->commit();
-    } else {
-        std::vector<VertexProperty> props = featureProperties(features);
-        props.push_back({"filled_share", toInputVertices(prepared, filledShare)});
-        writePly(output, read.mesh, props, plyOptionsFor(result));
-    }
-    if (args.gigamesh) {
-        GigaMeshMatInfo info;
-        info.inputFile = fs::absolute(input).string();
-        info.largestRadius = args.radius;
-        info.radii = plan.radii;
-        info.notes = {"msii voxel size " + std::to_string(plan.voxelSize) + ", precision " +
-                      std::to_string(args.precision) + (args.exact ? ", exact mode" : "")};
-        std::size_t k = 0;
-        GigaMeshRows plyRows;
-        if (sel.volume) {
-            info.invariant = GigaMeshInvariant::Volume;
-            plyRows = toGigaMeshRows(features[Invariant::Volume], GigaMeshInvariant::Volume);
-            writeGigaMeshMat(gigameshFiles[k++], gigaMeshMatHeader(info), plyRows);
-        }
-        if (sel.patch) {
-            info.invariant = GigaMeshInvariant::Patch;
-            const GigaMeshRows rows = toGigaMeshRows(features[Invariant::Patch], GigaMeshInvariant::Patch);
-            writeGigaMeshMat(gigameshFiles[k++], gigaMeshMatHeader(info), rows);
-            if (!sel.volume) plyRows = rows;
-        }
-        GigaMeshPlyOptions gmOptions;
-        gmOptions.comments.push_back(std::string("msii ") + versionString() + ": feature_vector = " +
-                                     (sel.volume ? "2 V/|B_r| - 1" : "P/(pi r^2)") +
-                                     ", largest radius first; quality = largest element");
-        writeGigaMeshPly(gigameshFiles[k], read.mesh, plyRows, gmOptions);
-    }
-    writeSeconds += write.seconds();
+    if (args.gigamesh) writeGigaMeshFiles(args, input, gigameshFiles, read.mesh, result);
+    const double writeSeconds = ply.seconds + write.seconds();
 
-    const MeshRunRecord record{args,           input,   output,    read,    inputFaces, prepareOptions,
-                               prepared,       options, result,    letters, qualityName, readSeconds,
-                               prepareSeconds, writeSeconds, total.seconds(), tiled, tiledInfo};
+    const MeshRunRecord record{args, input, output, read, options, result, readSeconds, writeSeconds, total.seconds()};
     writeTextFileAtomic(sidecar, runRecord(record).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
-
     if (!args.quiet)
-        std::fprintf(stderr, "msii: %s -> %s (%zu vertices, %.1f s)\n", input.c_str(),
-                     output.c_str(), read.mesh.numVertices(),
-                     total.seconds());
-    return {read.mesh.numVertices(), plan.voxelSize, total.seconds()};
-}
-
-void addPropertyNamesOption(CLI::App* cmd, std::string& prefix)
-{
-    static const std::map<std::string, std::string> styles{{"msii", ""}, {"cloudcompare", "scalar_"}};
-    cmd->add_option("--property-names", prefix,
-                    "Names of the output PLY's vertex properties: msii (V_01 ... quality; default) or "
-                    "cloudcompare (scalar_V_01 ... scalar_quality, which CloudCompare's command line "
-                    "loads as scalar fields)")
-        ->transform(CLI::CheckedTransformer(styles, CLI::ignore_case));
-}
-
-std::unique_ptr<tbb::global_control> limitThreads(int threads)
-{
-    if (threads < 0) throw InvalidInputError("--threads must be 0 (all cores) or more");
-    if (threads == 0) return nullptr;
-    return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                 std::size_t(threads));
+        std::fprintf(stderr, "msii: %s -> %s (%zu vertices, %.1f s)\n", input.c_str(), output.c_str(),
+                     read.mesh.numVertices(), total.seconds());
+    return {read.mesh.numVertices(), result.plan.voxelSize, total.seconds()};
 }
 
 std::function<int()> addComputeCommand(CLI::App& app)
@@ -523,9 +445,7 @@ std::function<int()> addComputeCommand(CLI::App& app)
             if (end == text.c_str()) return {};  // not a number: CLI11 says so
             return v >= 1 && v <= 64 ? std::string() : "the P and L precision must be between 1 and 64 cells per radius";
         });
-    cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
-    cmd->add_flag("-q,--quiet", args->quiet, "No progress, no summary; errors only");
-    cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs");
+    addCommonOptions(cmd, *args);
     addPropertyNamesOption(cmd, args->propertyPrefix);
     cmd->add_option("--units", args->units,
                     "Units of the mesh's coordinates, e.g. mm or m, recorded in the outputs so that pictures' scale "

@@ -25,49 +25,29 @@ namespace fs = std::filesystem;
 
 namespace msii::tools {
 
-namespace {
-
-std::vector<std::string> splitList(const std::string& text)
-{
-    std::vector<std::string> out;
-    std::stringstream in(text);
-    std::string item;
-    while (std::getline(in, item, ',')) {
-        item.erase(0, item.find_first_not_of(" \t"));
-        item.erase(item.find_last_not_of(" \t") + 1);
-        if (!item.empty()) out.push_back(item);
-    }
-    return out;
-}
-
-} // namespace
-
 OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, const std::string& output)
 {
     const Stopwatch total;
-    const Selection sel = parseInvariants(args);
     if (args.exact) throw InvalidInputError("--exact is for meshes; for a DEM, compute its mesh (msii-samples writes none: use the fast mode)");
     if (args.gigamesh) throw InvalidInputError("--gigamesh is for meshes, not rasters");
-    const std::string sidecar = sidecarPathFor(output);
-    for (const std::string& path : {output, sidecar}) {
-        if (!args.overwrite && fs::exists(path))
-            throw IOError("'" + path + "' exists already (use --overwrite to replace it)");
-        checkWritable(path);
-    }
-    DemComputeOptions options;
-    setInvariantsOptions(args, sel, options.invariants);
-    options.band = args.band;
-    options.maxHolePerimeter = args.fillHoles;
-    options.bands = splitList(args.bands);
-    if (!args.bands.empty() && options.bands.empty()) throw InvalidInputError("--bands selects nothing");
     if (args.tiles > 0) throw InvalidInputError("rasters are computed in windows: use --memory-budget or --window-cells, not --tiles");
-    if (!args.memoryBudget.empty()) options.memoryBudget = parseBytes(args.memoryBudget);
+    DemComputeOptions options;
+    options.compute = computeOptionsOf(args);
+    if (!args.bands.empty()) {
+        try {
+            options.bands = parseFeatureNames(args.bands, demBandNames(options.compute));
+        } catch (const InvalidInputError& e) {
+            throw InvalidInputError(std::string("--bands: ") + e.what());
+        }
+    }
+    const std::string sidecar = sidecarPathFor(output);
+    checkOutputs({output, sidecar}, args.overwrite);
+    options.band = args.band;
     options.windowCells = args.windowCells;
     std::ostringstream description;
     description << "msii " << versionString() << " compute R=" << args.radius << " N=" << args.scales << " of "
-                << fs::path(input).filename().string()
-                << "; V_jj = V/|B_r|, S_jj = S/(4 pi r^2) (plane 0.5), P_jj = P/(pi r^2), L_jj = L/(2 pi r) (plane 1), "
-                   "r_j = j*R/N; NaN = nodata or ball reaches the border";
+                << fs::path(input).filename().string() << "; " << featureLegend()
+                << "; NaN = nodata or ball reaches the border";
     options.output.description = description.str();
     std::ostringstream radii;
     for (int j = 1; j <= args.scales; ++j) radii << (j > 1 ? "," : "") << args.radius * j / args.scales;
@@ -95,11 +75,7 @@ OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, co
     j["command"] = "compute";
     j["input"] = {{"path", fs::absolute(input).string()}, {"format", "raster"}, {"band", result.input.band}};
     j["output"] = fs::absolute(output).string();
-    std::string letters;
-    for (const auto& [on, c] : {std::pair{sel.volume, 'V'}, std::pair{sel.sphere, 'S'}, std::pair{sel.patch, 'P'},
-                                std::pair{sel.line, 'L'}})
-        if (on) letters += c;
-    j["parameters"] = parametersRecord(args, result.plan, letters,
+    j["parameters"] = parametersRecord(args, result.plan, invariantLetters(options.compute.invariants.selected()),
                                        args.fillHoles >= 0 ? args.fillHoles : defaultMaxHolePerimeter(args.radius));
     j["raster"] = {{"width", grid.width},
                    {"height", grid.height},
@@ -114,8 +90,8 @@ OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, co
                                 {"cells", result.windowCells}, {"halo_cells", result.haloCells},
                                 {"narrow_halo_cells", result.narrowHaloCells},
                                 {"windows_with_wide_halo", result.wideHaloWindows}}}};
-    j["mesh"] = {{"triangles", result.triangles}, {"masked_values", result.maskedValues}};
-    addDiagnostics(j, {&result.diagnostics});
+    j["mesh"] = {{"triangles", result.triangles}, {"masked_values", result.masked.total()}};
+    addDiagnostics(j, result.diagnostics);
     if (const double peak = peakMemoryBytes(); peak > 0) j["peak_memory_bytes"] = peak;
     const InvariantsCost& t = result.cost;
     j["timings_seconds"] = {{"read", result.readSeconds}, {"prepare", result.prepareSeconds}, {"check", t.check},

@@ -2,6 +2,7 @@
 #include "compute_args.h"
 
 #include <msii/core/version.h>
+#include <msii/io/feature_properties.h>
 
 #include <filesystem>
 #include <fstream>
@@ -20,19 +21,17 @@ double peakMemoryBytes()
     return 0;
 }
 
-void addDiagnostics(nlohmann::json& record, const std::vector<const std::vector<Diagnostic>*>& lists)
+void addDiagnostics(nlohmann::json& record, const std::vector<Diagnostic>& diagnostics)
 {
     // Coded (kind, count, figures) for programs, and the sentences as printed.
     record["diagnostics"] = nlohmann::json::array();
     record["warnings"] = nlohmann::json::array();
-    for (const std::vector<Diagnostic>* list : lists)
-        for (const Diagnostic& d : *list) {
-            nlohmann::json figures = nlohmann::json::object();
-            for (const auto& [name, value] : d.figures) figures[name] = value;
-            record["diagnostics"].push_back(
-                {{"kind", d.kind}, {"count", d.count}, {"figures", figures}, {"message", d.message}});
-            record["warnings"].push_back(worded(d));
-        }
+    for (const Diagnostic& d : diagnostics) {
+        nlohmann::json figures = nlohmann::json::object();
+        for (const auto& [name, value] : d.figures) figures[name] = value;
+        record["diagnostics"].push_back({{"kind", d.kind}, {"count", d.count}, {"figures", figures}, {"message", d.message}});
+        record["warnings"].push_back(worded(d));
+    }
 }
 
 nlohmann::json parametersRecord(const ComputeArgs& args, const ScalePlan& plan, const std::string& letters,
@@ -59,85 +58,101 @@ nlohmann::json parametersRecord(const ComputeArgs& args, const ScalePlan& plan, 
             {"units", args.units}};
 }
 
+namespace {
+
+/// The record's `conventions`: how the features are normalised and ordered.
+nlohmann::json conventions(const ComputeArgs& args, const std::vector<Invariant>& invariants)
+{
+    const std::string quality(1, invariantLetter(invariants.front()));  // featureProperties' choice
+    nlohmann::json j;
+    for (Invariant i : kAllInvariants) j[std::string(1, invariantLetter(i))] = invariantConvention(i);
+    j["order"] = "radius ascending: V_01 = r_1 = R/N ... V_NN = R";
+    j["quality"] = quality + " (the first of V, S, P, L computed) at the largest radius with a value; "
+                             "a plane's value (V, S 0.5; P, L 1) where none has one; never NaN";
+    j["valid_radii"] = "how many radii have a value of the quality's invariant (0 to N)";
+    j["masked"] = args.exact ? "NaN where the ball reaches a mesh border, and at vertices not computed"
+                             : "NaN where the ball of that radius reaches a mesh border";
+    return j;
+}
+
+/// The record's `mesh`: the input's counts and the prepared mesh's statistics.
+nlohmann::json meshRecord(const MeshRunRecord& r)
+{
+    const ComputeResult& result = r.result;
+    const MeshStats& st = result.stats;
+    std::size_t removed = 0;
+    for (const Diagnostic& c : result.preparation.changes)
+        if (c.kind == "degenerate_faces_removed" || c.kind == "duplicate_faces_removed" ||
+            c.kind == "non_manifold_faces_removed")
+            removed += c.count;
+    const std::size_t faces = r.read.mesh.numTriangles();
+    return {{"vertices", r.read.mesh.numVertices()},
+            {"faces", faces},
+            {"faces_in_file", faces},
+            {"faces_removed", removed},
+            {"closed", result.check.closed},
+            {"border_edges", result.check.numBorderEdges},
+            {"bbox_min", {st.bboxMin.x, st.bboxMin.y, st.bboxMin.z}},
+            {"bbox_max", {st.bboxMax.x, st.bboxMax.y, st.bboxMax.z}},
+            {"diagonal", st.diagonal},
+            {"edge_length", {{"min", st.minEdge}, {"median", st.medianEdge}, {"mean", st.meanEdge}, {"max", st.maxEdge}}},
+            {"area", st.area},
+            {"masked_values", result.masked.total()}};
+}
+
+/// The record's `preparation`: what was repaired and filled.
+nlohmann::json preparationRecord(const PreparationSummary& p)
+{
+    nlohmann::json changes = nlohmann::json::array();
+    for (const Diagnostic& c : p.changes) changes.push_back({{"kind", c.kind}, {"count", c.count}, {"message", c.message}});
+    return {{"changes", changes},
+            {"holes", {{"filled", p.holes.numFilled},
+                       {"largest_perimeter", p.holes.largestPerimeter},
+                       {"area_added", p.holes.areaAdded},
+                       {"left_open_too_large", p.holes.numTooLarge},
+                       {"left_open_outer_border", p.holes.numOuterBorders},
+                       {"not_filled_failed", p.holes.numFailed},
+                       {"max_perimeter", p.maxHolePerimeter}}},
+            {"isolated_vertices", p.isolatedVertices},
+            {"prepared_vertices", p.vertices},
+            {"prepared_faces", p.faces}};
+}
+
+} // namespace
+
 nlohmann::json runRecord(const MeshRunRecord& r)
 {
     const ComputeArgs& args = r.args;
-    const ScalePlan& plan = r.result.plan;
-    const InvariantsResult& result = r.result;
-    const PrepareMeshResult& prepared = r.prepared;
+    const ComputeResult& result = r.result;
     nlohmann::json j;
     j["program"] = "msii";
     j["version"] = versionString();
     j["command"] = "compute";
     j["input"] = {{"path", fs::absolute(r.input).string()}, {"format", r.read.format}};
     j["output"] = fs::absolute(r.output).string();
-    j["parameters"] = parametersRecord(args, plan, r.letters, r.prepareOptions.maxHolePerimeter);
+    j["parameters"] = parametersRecord(args, result.plan, invariantLetters(r.options.invariants.selected()),
+                                       result.preparation.maxHolePerimeter);
     j["parameters"]["band_half_width_voxels"] = result.cost.bandHalfWidth;
-    j["parameters"]["exact_vertices"] = r.options.exactVertices.size();
-    j["conventions"] = {{"V", "V/|B_r| in [0,1], flat plane 0.5, convex < 0.5"},
-                        {"S", "S/(4 pi r^2) in [0,1], flat plane 0.5, convex < 0.5"},
-                        {"P", "P/(pi r^2), flat plane 1"},
-                        {"L", "L/(2 pi r), flat plane 1"},
-                        {"order", "radius ascending: V_01 = r_1 = R/N ... V_NN = R"},
-                        {"quality", r.qualityName.substr(0, 1) +
-                                        " (the first of V, S, P, L computed) at the largest radius with a value; "
-                                        "a plane's value (V, S 0.5; P, L 1) where none has one; never NaN"},
-                        {"valid_radii", "how many radii have a value of the quality's invariant (0 to N)"},
-                        {"masked", args.exact ? "NaN where the ball reaches a mesh border, and at vertices not computed"
-                                              : "NaN where the ball of that radius reaches a mesh border"}};
-    const auto& st = result.stats;
-    j["mesh"] = {{"vertices", r.read.mesh.numVertices()},
-                 {"faces", r.inputFaces},
-                 {"faces_in_file", r.inputFaces},
-                 {"faces_removed", [&] {
-                      std::size_t removed = 0;
-                      for (const Diagnostic& c : prepared.changes)
-                          if (c.kind == "degenerate_faces_removed" || c.kind == "duplicate_faces_removed" ||
-                              c.kind == "non_manifold_faces_removed")
-                              removed += c.count;
-                      return removed;
-                  }()},
-                 {"closed", result.check.closed},
-                 {"border_edges", result.check.numBorderEdges},
-                 {"bbox_min", {st.bboxMin.x, st.bboxMin.y, st.bboxMin.z}},
-                 {"bbox_max", {st.bboxMax.x, st.bboxMax.y, st.bboxMax.z}},
-                 {"diagonal", st.diagonal},
-                 {"edge_length", {{"min", st.minEdge}, {"median", st.medianEdge}, {"mean", st.meanEdge}, {"max", st.maxEdge}}},
-                 {"area", st.area},
-                 {"masked_values", result.cost.maskedValues}};
+    j["parameters"]["exact_vertices"] = r.options.invariants.exactVertices.size();
+    j["conventions"] = conventions(args, r.options.invariants.selected());
+    j["mesh"] = meshRecord(r);
     j["level_set"] = {{"active_voxels", result.cost.levelSetVoxels}, {"bytes", result.cost.levelSetBytes}};
     if (const double peak = peakMemoryBytes(); peak > 0) j["peak_memory_bytes"] = peak;
     const InvariantsCost& t = result.cost;
-    j["timings_seconds"] = {{"read", r.readSeconds},     {"prepare", r.prepareSeconds}, {"check", t.check},
+    j["timings_seconds"] = {{"read", r.readSeconds},     {"prepare", result.preparation.seconds}, {"check", t.check},
                             {"level_set", t.levelSet}, {"occupancy", t.occupancy},
                             {"stencils", t.stencils},  {"interpolation", t.interpolation},
                             {"samples", t.samples},    {"patch_line", t.patchLine},
                             {"exact", t.exact},        {"write", r.writeSeconds},
                             {"total", r.totalSeconds}};
-    if (r.tiled)
-        j["tiling"] = {{"tiles_per_axis", r.tiledInfo.tilesPerAxis},
-                       {"tiles", r.tiledInfo.tiles},
-                       {"largest_tile_vertices", r.tiledInfo.largestTileVertices},
-                       {"halo", r.tiledInfo.haloWidth},
-                       {"estimated_peak_bytes", r.tiledInfo.estimatedPeakBytes}};
-    j["preparation"] = {
-        {"changes", [&] {
-             nlohmann::json list = nlohmann::json::array();
-             for (const Diagnostic& c : prepared.changes)
-                 list.push_back({{"kind", c.kind}, {"count", c.count}, {"message", c.message}});
-             return list;
-         }()},
-        {"holes", {{"filled", prepared.holes.numFilled},
-                   {"largest_perimeter", prepared.holes.largestPerimeter},
-                   {"area_added", prepared.holes.areaAdded},
-                   {"left_open_too_large", prepared.holes.numTooLarge},
-                   {"left_open_outer_border", prepared.holes.numOuterBorders},
-                   {"not_filled_failed", prepared.holes.numFailed},
-                   {"max_perimeter", r.prepareOptions.maxHolePerimeter}}},
-        {"isolated_vertices", prepared.numIsolatedVertices},
-        {"prepared_vertices", prepared.mesh.numVertices()},
-        {"prepared_faces", prepared.mesh.numTriangles()}};
-    addDiagnostics(j, {&prepared.changes, &result.diagnostics});
+    if (result.tiled)
+        j["tiling"] = {{"tiles_per_axis", result.tiling.tilesPerAxis},
+                       {"tiles", result.tiling.tiles},
+                       {"largest_tile_vertices", result.tiling.largestTileVertices},
+                       {"halo", result.tiling.haloWidth},
+                       {"estimated_peak_bytes", result.tiling.estimatedPeakBytes}};
+    j["preparation"] = preparationRecord(result.preparation);
+    addDiagnostics(j, result.diagnostics);
     return j;
 }
 

@@ -3,10 +3,11 @@
 #include <msii/core/errors.h>
 #include <msii/io/atomic_file.h>
 #include <msii/io/feature_table.h>
-#include <msii/mesh/read_mesh.h>
+#include <msii/io/read_mesh.h>
 #include <msii/terrain/dem.h>
 #include <msii/terrain/raster_output.h>
 
+#include "commands.h"
 #include "compute_args.h"
 
 #include <algorithm>
@@ -191,9 +192,7 @@ std::string outputPath(const std::string& input, const std::string& output, cons
     }
     if (fs::path(path).extension() != extension)
         throw InvalidInputError("the output '" + path + "' must be a " + extension + " file");
-    if (!overwrite && fs::exists(path))
-        throw IOError("'" + path + "' exists already (use --overwrite to replace it)");
-    checkWritable(path);
+    checkOutputs({path}, overwrite);
     return path;
 }
 

@@ -9,7 +9,7 @@
 #include <msii/core/run_context.h>
 #include <msii/core/stopwatch.h>
 #include <msii/core/version.h>
-#include <msii/map/feature_map.h>
+#include <msii/featuremap/feature_map.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -21,7 +21,7 @@ namespace msii::tools {
 
 namespace {
 
-struct MapArgs {
+struct MapArgs : CommonArgs {
     std::string input, output;
     std::vector<std::string> matFiles;
     ViewArgs view;
@@ -29,8 +29,6 @@ struct MapArgs {
     std::string compression = "piz";
     bool half = false;
     std::string units;  // empty: what the PLY states, else mm
-    int threads = 0;
-    bool quiet = false, overwrite = false;
 };
 
 constexpr int kDefaultPixels = 2048;
@@ -101,9 +99,7 @@ std::function<int()> addMapCommand(CLI::App& app)
     cmd->add_option("--compression", args->compression, "piz (default: the smallest files of feature data), zip, zips, rle or none (about 5 times faster than piz, twice the size); all lossless");
     cmd->add_flag("--half", args->half, "16-bit half channels instead of 32-bit float");
     cmd->add_option("--units", args->units, "Units of the mesh, for the header (default: what the PLY states, else mm)");
-    cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
-    cmd->add_flag("-q,--quiet", args->quiet, "No progress, no summary; errors only");
-    cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output");
+    addCommonOptions(cmd, *args);
     return [args]() {
         const auto limit = limitThreads(args->threads);
         return runMap(*args);

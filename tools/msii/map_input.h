@@ -1,7 +1,7 @@
 #pragma once
 // What `msii map` and `msii render` share: the view and resolution options, and the radii
 // and parameters a feature PLY records in its comments.
-#include <msii/map/map_frame.h>
+#include <msii/featuremap/map_frame.h>
 
 #include <CLI/CLI.hpp>
 

@@ -19,11 +19,9 @@ namespace msii::tools {
 
 namespace {
 
-struct MergeArgs {
+struct MergeArgs : CommonArgs {
     std::vector<std::string> parts;
     std::string output;
-    bool quiet = false, overwrite = false;
-    std::string propertyPrefix;  // --property-names
 };
 
 int runMerge(const MergeArgs& args)
@@ -111,10 +109,12 @@ std::function<int()> addMergeCommand(CLI::App& app)
                  "the whole result, equal to computing it in one piece.");
     cmd->add_option("parts", args->parts, "The tiles' PLY files (any order)")->required();
     cmd->add_option("-o,--output", args->output, "Output PLY (default <first part's stem>.merged.ply)");
-    cmd->add_flag("-q,--quiet", args->quiet, "Errors only");
-    cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output");
+    addCommonOptions(cmd, *args);
     addPropertyNamesOption(cmd, args->propertyPrefix);
-    return [args]() { return runMerge(*args); };
+    return [args]() {
+        const auto limit = limitThreads(args->threads);
+        return runMerge(*args);
+    };
 }
 
 } // namespace msii::tools

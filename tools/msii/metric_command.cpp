@@ -20,16 +20,13 @@ namespace msii::tools {
 
 namespace {
 
-struct MetricArgs {
+struct MetricArgs : CommonArgs {
     std::string input, output;
     std::vector<std::string> matFiles;
     std::string invariants = "V";
     std::string metrics = "mahalanobis";
     double p = 2.0;
     std::string reference = "flat";
-    int threads = 0;
-    bool quiet = false, overwrite = false;
-    std::string propertyPrefix;  // --property-names
 };
 
 struct NamedMetric {
@@ -199,9 +196,7 @@ std::function<int()> addMetricCommand(CLI::App& app)
     cmd->add_option("--reference", args->reference,
                     "o: flat (the ideal flat surface, default), vertex:INDEX, point:X,Y,Z (the "
                     "nearest vertex) or vector:V1,V2,...");
-    cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
-    cmd->add_flag("-q,--quiet", args->quiet, "No summary; errors only");
-    cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output");
+    addCommonOptions(cmd, *args);
     addPropertyNamesOption(cmd, args->propertyPrefix);
     return [args]() {
         const auto limit = limitThreads(args->threads);

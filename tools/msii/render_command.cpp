@@ -10,8 +10,8 @@
 #include <msii/core/terminal_progress.h>
 #include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
-#include <msii/map/feature_map.h>
-#include <msii/map/rasterize.h>
+#include <msii/featuremap/feature_map.h>
+#include <msii/featuremap/rasterize.h>
 #include <msii/render/annotate.h>
 #include <msii/render/typeface.h>
 #include <msii/render/picture.h>
@@ -31,7 +31,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct RenderArgs {
+struct RenderArgs : CommonArgs {
     std::string input, output;
     std::vector<std::string> matFiles;
     ViewArgs view;
@@ -50,8 +50,6 @@ struct RenderArgs {
     bool noColorBar = false, noScaleBar = false;
     std::string units;
     std::string font;  // --font: a TrueType/OpenType file; empty: MSII_FONT, then fontconfig
-    int threads = 0;
-    bool quiet = false, overwrite = false;
 };
 
 constexpr int kDefaultPixels = 2048;
@@ -381,9 +379,7 @@ std::function<int()> addRenderCommand(CLI::App& app)
                     "Font file (TrueType/OpenType) for the labels (default: environment MSII_FONT, then "
                     "DejaVu Sans through fontconfig, else a built-in pixel font with a warning)");
     addViewOptions(cmd, args->view, kDefaultPixels);
-    cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
-    cmd->add_flag("-q,--quiet", args->quiet, "No progress, no summary; errors only");
-    cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output");
+    addCommonOptions(cmd, *args);
     return [args]() {
         const auto limit = limitThreads(args->threads);
         return runRender(*args);

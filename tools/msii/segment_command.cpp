@@ -1,17 +1,13 @@
-/// `msii segment INPUT.ply --threshold T` and `msii outline INPUT.ply --levels …`:
-/// connected components of a thresholded per-vertex value (labels and a table), and isolines
-/// as SVG outlines in the map plane, for tracing and drawing.
+/// `msii segment INPUT.ply --threshold T`: connected components of a thresholded per-vertex
+/// value (labels and a table), e.g. the wedges of a tablet.
 #include "commands.h"
 #include "feature_input.h"
-#include "map_input.h"
 
 #include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
 #include <msii/core/version.h>
 #include <msii/io/atomic_file.h>
 #include <msii/io/write_ply.h>
-#include <msii/outline/isolines.h>
-#include <msii/render/colormap.h>
 #include <msii/segmentation/components.h>
 
 #include <cmath>
@@ -26,7 +22,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct SegmentArgs {
+struct SegmentArgs : CommonArgs {
     std::string input, output, table;
     std::vector<std::string> matFiles;
     std::string property = "quality";
@@ -34,9 +30,6 @@ struct SegmentArgs {
     bool below = false;
     long long minVertices = 1;
     double minArea = 0;
-    int threads = 0;
-    bool quiet = false, overwrite = false;
-    std::string propertyPrefix;  // --property-names
 };
 
 int runSegment(const SegmentArgs& args)
@@ -49,9 +42,7 @@ int runSegment(const SegmentArgs& args)
     std::string table = args.table;
     if (table.empty()) table = (fs::path(output).parent_path() / (fs::path(output).stem().string() + ".csv")).string();
     if (fs::path(table).extension() != ".csv") throw InvalidInputError("the table '" + table + "' must be a .csv file");
-    if (!args.overwrite && fs::exists(table))
-        throw IOError("'" + table + "' exists already (use --overwrite to replace it)");
-    checkWritable(table);
+    checkOutputs({table}, args.overwrite);
     FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
     const VertexProperty& f = in.properties[findProperty(in, args.property)];
 
@@ -96,61 +87,6 @@ int runSegment(const SegmentArgs& args)
     return 0;
 }
 
-struct OutlineArgs {
-    std::string input, output;
-    std::vector<std::string> matFiles;
-    std::string property = "quality";
-    std::string levels, percentiles = "1,99";
-    int count = 0;
-    ViewArgs view;
-    std::string units = "mm";
-    int threads = 0;
-    bool quiet = false, overwrite = false;
-};
-
-int runOutline(const OutlineArgs& args)
-{
-    const Stopwatch total;
-    std::vector<double> levels;
-    if (!args.levels.empty()) levels = parseNumberList(args.levels, "--levels");
-    if (args.count < 0) throw InvalidInputError("--count must be 0 or more");
-    if (levels.empty() && args.count == 0) throw InvalidInputError("give --levels or --count");
-    const MapFrameOptions frameOpts = frameOptions(args.view, 1024);
-    const std::string output = outputPath(args.input, args.output, "outline", args.overwrite, ".svg");
-    FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
-    const VertexProperty& f = in.properties[findProperty(in, args.property)];
-    if (args.count > 0) {
-        const std::vector<double> p = parseNumberList(args.percentiles, "--percentiles");
-        if (p.size() != 2) throw InvalidInputError("--percentiles takes LOW,HIGH");
-        const ValueRange r = percentileRange(f.values, p[0], p[1]);
-        for (double l : evenLevels(r.lo, r.hi, args.count)) levels.push_back(l);
-    }
-    const MapFrame frame = makeMapFrame(in.mesh, frameOpts);
-    const std::vector<Polyline> lines = computeIsolines(in.mesh, f.values, levels);
-    std::vector<Polyline2> flat;
-    flat.reserve(lines.size());
-    for (const Polyline& l : lines) {
-        Polyline2 p{l.level, l.closed, {}};
-        p.points.reserve(l.points.size());
-        for (const Vec3& q : l.points) {
-            const Vec3 m = frame.toMap(q);
-            p.points.push_back({m.x, m.y});
-        }
-        flat.push_back(std::move(p));
-    }
-    SvgOptions svg;
-    svg.minX = frame.minU;
-    svg.width = frame.width * frame.pixelSize;
-    svg.height = frame.height * frame.pixelSize;
-    svg.minY = frame.maxV - svg.height;
-    svg.units = args.units;
-    writeSvg(output, flat, svg);
-    if (!args.quiet)
-        std::fprintf(stderr, "msii: %s -> %s (%zu lines at %zu levels, %.1f s)\n", args.input.c_str(),
-                     output.c_str(), flat.size(), levels.size(), total.seconds());
-    return 0;
-}
-
 } // namespace
 
 std::function<int()> addSegmentCommand(CLI::App& app)
@@ -169,38 +105,11 @@ std::function<int()> addSegmentCommand(CLI::App& app)
     cmd->add_flag("--below", args->below, "Select value <= threshold instead");
     cmd->add_option("--min-vertices", args->minVertices, "Drop components with fewer vertices (default 1)");
     cmd->add_option("--min-area", args->minArea, "Drop components with less area, mesh units^2 (default 0)");
-    cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
-    cmd->add_flag("-q,--quiet", args->quiet, "No summary; errors only");
-    cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs");
+    addCommonOptions(cmd, *args);
     addPropertyNamesOption(cmd, args->propertyPrefix);
     return [args]() {
         const auto limit = limitThreads(args->threads);
         return runSegment(*args);
-    };
-}
-
-std::function<int()> addOutlineCommand(CLI::App& app)
-{
-    auto args = std::make_shared<OutlineArgs>();
-    CLI::App* cmd = app.add_subcommand(
-        "outline", "Isolines of a per-vertex value as SVG outlines in the map plane (mesh units), one "
-                   "path per line, for tracing and drawings.");
-    cmd->add_option("input", args->input, "PLY with per-vertex values")->required();
-    cmd->add_option("-o,--output", args->output, "Output SVG (default <input stem>.outline.svg)");
-    cmd->add_option("--mat", args->matFiles, "GigaMesh feature file(s) for the input mesh");
-    cmd->add_option("--property", args->property, "Vertex property (default quality)");
-    cmd->add_option("--levels", args->levels, "Isoline values, comma-separated");
-    cmd->add_option("--count", args->count, "Or: this many levels evenly inside the --percentiles range");
-    cmd->add_option("--percentiles", args->percentiles, "Range for --count (default 1,99)");
-    cmd->add_option("--view", args->view.view, "Projection as for msii map (default best)");
-    cmd->add_flag("--flip", args->view.flip, "With --view best: the other side");
-    cmd->add_option("--units", args->units, "Units of the mesh for the SVG size (default mm)");
-    cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
-    cmd->add_flag("-q,--quiet", args->quiet, "No summary; errors only");
-    cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output");
-    return [args]() {
-        const auto limit = limitThreads(args->threads);
-        return runOutline(*args);
     };
 }
 

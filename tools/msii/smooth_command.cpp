@@ -21,7 +21,7 @@ namespace msii::tools {
 
 namespace {
 
-struct SmoothArgs {
+struct SmoothArgs : CommonArgs {
     std::string input, output;
     std::vector<std::string> matFiles;
     std::string filter = "mean";
@@ -31,9 +31,6 @@ struct SmoothArgs {
     std::string border = "ring";
     std::string properties = "quality";
     bool allFeatures = false;
-    int threads = 0;
-    bool quiet = false, overwrite = false;
-    std::string propertyPrefix;  // --property-names
 };
 
 SmoothingOptions smoothingOptions(const SmoothArgs& args)
@@ -132,9 +129,7 @@ std::function<int()> addSmoothCommand(CLI::App& app)
                     "Vertex properties to smooth, comma-separated (default quality)");
     cmd->add_flag("--all-features", args->allFeatures,
                   "Smooth every feature element (V_01 ..., S_, P_, L_) and quality");
-    cmd->add_option("-j,--threads", args->threads, "Worker threads (default: all cores)");
-    cmd->add_flag("-q,--quiet", args->quiet, "No progress, no summary; errors only");
-    cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output");
+    addCommonOptions(cmd, *args);
     addPropertyNamesOption(cmd, args->propertyPrefix);
     return [args]() {
         const auto limit = limitThreads(args->threads);

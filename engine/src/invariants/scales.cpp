@@ -71,6 +71,12 @@ int ScalePlan::numVolumeSphereLevels() const
     return volumeSphereLevels.empty() ? 0 : *std::max_element(volumeSphereLevels.begin(), volumeSphereLevels.end()) + 1;
 }
 
+Vec3 localOrigin(const Vec3& centre, double h0)
+{
+    const double step = 1024.0 * h0;
+    return {std::round(centre.x / step) * step, std::round(centre.y / step) * step, std::round(centre.z / step) * step};
+}
+
 ScalePlan makeScalePlan(const std::vector<double>& radii, double h0, double volumeSpherePrecision,
                         double patchLinePrecision)
 {

@@ -769,9 +769,6 @@ VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& leve
     stage.restart();
     removeSmoothingBias(result, h0);
     result.interpolationSeconds += stage.seconds();
-
-    for (const auto& column : result.volume)
-        for (float v : column) result.numMaskedValues += std::isnan(v) ? 1 : 0;
     return result;
 }
 

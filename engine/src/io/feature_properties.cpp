@@ -1,6 +1,10 @@
 #include <msii/io/feature_properties.h>
 
+#include <msii/core/errors.h>
+
+#include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -39,6 +43,92 @@ std::vector<VertexProperty> featureProperties(const FeatureSet& features)
         props.push_back(std::move(count));
     }
     return props;
+}
+
+std::vector<VertexProperty> outputProperties(const FeatureSet& features, std::vector<float> filledShare)
+{
+    std::vector<VertexProperty> props = featureProperties(features);
+    if (!filledShare.empty()) props.push_back({"filled_share", std::move(filledShare)});
+    return props;
+}
+
+std::vector<std::string> outputPropertyNames(const std::vector<Invariant>& invariants, int scales)
+{
+    std::vector<std::string> names;
+    for (Invariant inv : invariants)
+        for (int j = 0; j < scales; ++j) names.push_back(featureName(invariantLetter(inv), std::size_t(j)));
+    if (!invariants.empty()) names.insert(names.end(), {"quality", "valid_radii"});
+    names.push_back("filled_share");
+    return names;
+}
+
+namespace {
+
+std::string lowerCase(std::string text)
+{
+    std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return text;
+}
+
+/// "V_01 ... V_16, S_01 ... S_16, quality, ...": the names with runs of one letter shortened.
+std::string shortList(const std::vector<std::string>& names)
+{
+    std::string out;
+    for (std::size_t i = 0; i < names.size();) {
+        std::size_t end = i + 1;
+        const auto numbered = [&](std::size_t k) { return names[k].size() > 2 && names[k][1] == '_' && std::isdigit(names[k][2]); };
+        while (numbered(i) && end < names.size() && numbered(end) && names[end][0] == names[i][0]) ++end;
+        out += (out.empty() ? "" : ", ") + names[i] + (end - i > 1 ? " ... " + names[end - 1] : "");
+        i = end;
+    }
+    return out;
+}
+
+} // namespace
+
+std::vector<std::string> parseFeatureNames(const std::string& text, const std::vector<std::string>& available)
+{
+    std::vector<std::string> out;
+    for (std::size_t i = 0; i < text.size();) {
+        if (text[i] == ',' || text[i] == ' ' || text[i] == '\t') {
+            ++i;
+            continue;
+        }
+        const std::size_t end = std::min(text.find_first_of(", \t", i), text.size());
+        const std::string name = text.substr(i, end - i);
+        const auto found = std::find_if(available.begin(), available.end(),
+                                        [&](const std::string& a) { return lowerCase(a) == lowerCase(name); });
+        if (found == available.end())
+            throw InvalidInputError("there is no feature '" + name + "' (there are " + shortList(available) + ")");
+        out.push_back(*found);
+        i = end;
+    }
+    if (out.empty()) throw InvalidInputError("the list of features selects nothing (e.g. quality,V_04)");
+    return out;
+}
+
+std::string invariantFormula(Invariant invariant)
+{
+    switch (invariant) {
+    case Invariant::Volume: return "V/|B_r|";
+    case Invariant::Sphere: return "S/(4 pi r^2)";
+    case Invariant::Patch: return "P/(pi r^2)";
+    case Invariant::Line: return "L/(2 pi r)";
+    }
+    return "";
+}
+
+std::string featureLegend()
+{
+    const auto entry = [](Invariant i) { return std::string(1, invariantLetter(i)) + "_jj = " + invariantFormula(i); };
+    return entry(Invariant::Volume) + ", " + entry(Invariant::Sphere) + " (plane 0.5), " + entry(Invariant::Patch) +
+           ", " + entry(Invariant::Line) + " (plane 1), r_j = j*R/N";
+}
+
+std::string invariantConvention(Invariant invariant)
+{
+    const bool share = invariant == Invariant::Volume || invariant == Invariant::Sphere;
+    return invariantFormula(invariant) + (share ? " in [0,1], flat plane 0.5, convex < 0.5" : ", flat plane 1");
 }
 
 float qualityStandIn(const FeatureSet& features)

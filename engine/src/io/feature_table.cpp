@@ -13,26 +13,6 @@
 
 namespace msii {
 
-std::vector<Invariant> parseInvariantList(const std::string& text)
-{
-    std::vector<Invariant> out;
-    std::stringstream in(text);
-    std::string item;
-    while (std::getline(in, item, ',')) {
-        item.erase(0, item.find_first_not_of(" \t"));
-        item.erase(item.find_last_not_of(" \t") + 1);
-        if (item.empty()) continue;
-        const std::optional<Invariant> letter = item.size() == 1 ? invariantOfLetter(item[0]) : std::nullopt;
-        if (!letter) throw InvalidInputError("unknown invariant '" + item + "' (use V, S, P or L, comma-separated)");
-        const Invariant inv = *letter;
-        if (std::find(out.begin(), out.end(), inv) != out.end())
-            throw InvalidInputError("invariant '" + item + "' is listed twice");
-        out.push_back(inv);
-    }
-    if (out.empty()) throw InvalidInputError("no invariant selected (use V, S, P or L, comma-separated)");
-    return out;
-}
-
 FeatureTable featureTableOf(const std::vector<VertexProperty>& properties, std::size_t numVertices,
                             const std::vector<Invariant>& invariants)
 {

@@ -4,7 +4,7 @@
 #include <msii/core/version.h>
 #include <msii/io/atomic_file.h>
 #include <msii/io/write_ply.h>
-#include <msii/mesh/read_ply.h>
+#include <msii/io/read_ply.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -22,7 +22,7 @@ std::string fileName(const std::string& path) { return std::filesystem::path(pat
 std::vector<std::string> bandNames(const DemComputeOptions& options)
 {
     if (!options.bands.empty()) return options.bands;
-    const InvariantsOptions& o = options.invariants;
+    const InvariantsOptions& o = options.compute.invariants;
     const char letter = o.computeVolume ? 'V' : o.computeSphere ? 'S' : o.computePatch ? 'P' : 'L';
     std::vector<std::string> names;
     for (int j = 0; j < o.scales; ++j) names.push_back(featureName(letter, std::size_t(j)));
@@ -74,191 +74,256 @@ private:
     std::vector<std::string> mOrder;
 };
 
+/// How the raster is cut: windows of side × side own cells with a halo, all with one plan.
+struct WindowLayout {
+    int width = 0, height = 0;       ///< of the raster, cells
+    int side = 0;                    ///< own cells per window side
+    int narrowHalo = 0, wideHalo = 0;  ///< cells
+    bool oneWindow = true;
+    /// Windows' options: with the shared plan when there are several.
+    ComputeOptions options;
+};
+
+/// The plan of several windows, made on the window of 1024² cells at the raster's centre:
+/// its voxel size and vertex spacing, and the local frame's origin at the raster's centre.
+ScalePlan sharedPlan(const DemSource& source, const std::string& input, const ComputeOptions& options,
+                     std::vector<Diagnostic>& diagnostics)
+{
+    const RasterGeoreference& grid = source.info().georeference;
+    const std::array<double, 6>& t = grid.transform;
+    const int W = grid.width, H = grid.height;
+    const int pc = std::min(W, 1024), pr = std::min(H, 1024);
+    const DemMesh pm = demToMesh(source.read((W - pc) / 2, (H - pr) / 2, pc, pr));
+    if (pm.mesh.numTriangles() == 0)
+        throw InvalidInputError(fileName(input) + ": the window at its centre has no surface to plan the computation on");
+    PrepareMeshOptions po;
+    po.repair = options.repair;
+    po.radius = options.invariants.radius;
+    po.maxHolePerimeter = options.maxHolePerimeter;
+    const InvariantsResult planned = planInvariants(prepareMesh(pm.mesh, po).mesh, options.invariants);
+    diagnostics = planned.diagnostics;
+    ScalePlan plan = planned.plan;
+    const double midX = t[0] + 0.5 * W * t[1] + 0.5 * H * t[2], midY = t[3] + 0.5 * W * t[4] + 0.5 * H * t[5];
+    plan.origin = localOrigin({midX, midY, 0.5 * (planned.stats.bboxMin.z + planned.stats.bboxMax.z)}, plan.voxelSize);
+    return plan;
+}
+
+/// The windows for @p options: one if the raster fits the budget (or --window-cells), else
+/// as many as fit, with the shared plan and halos that reach past everything a window's own
+/// cells depend on.
+WindowLayout layWindows(const DemSource& source, const std::string& input, const DemComputeOptions& options,
+                        DemComputeResult& result)
+{
+    const InvariantsOptions& asked = options.compute.invariants;
+    const RasterGeoreference& grid = source.info().georeference;
+    const std::array<double, 6>& t = grid.transform;
+    WindowLayout w;
+    w.width = grid.width, w.height = grid.height;
+    w.options = options.compute;
+    if (w.options.maxHolePerimeter < 0) w.options.maxHolePerimeter = defaultMaxHolePerimeter(asked.radius);
+    w.options.tiling = TilingOptions();  // each window in one piece
+    // The shortest step between neighbouring cell centres on the ground.
+    const double cell = std::min(std::hypot(t[1], t[4]), std::hypot(t[2], t[5]));
+    const double budget =
+        options.compute.tiling.memoryBudget > 0 ? options.compute.tiling.memoryBudget : kDefaultDemMemoryBudget;
+    const double cellsPerWindow = budget / computationBytesPerVertex(asked);
+    w.oneWindow = options.windowCells == 0 ? double(w.width) * double(w.height) <= cellsPerWindow
+                                           : options.windowCells >= std::max(w.width, w.height);
+    w.side = std::max(w.width, w.height);
+    if (w.oneWindow) return w;  // planned on its own mesh, as the mesh path would
+    w.options.invariants.plan = sharedPlan(source, input, w.options, result.diagnostics);
+    const ScalePlan& plan = *w.options.invariants.plan;
+    result.plan = plan;
+    // The narrow halo holds everything the own cells depend on; the wide one also a hole next
+    // to the window's edge that the whole raster would fill (at most half its perimeter across).
+    w.narrowHalo = int(std::ceil(haloWidth(plan) / cell)) + 1;
+    w.wideHalo = int(std::ceil((haloWidth(plan) + 0.5 * w.options.maxHolePerimeter) / cell)) + 1;
+    w.side = options.windowCells > 0 ? options.windowCells : int(std::floor(std::sqrt(cellsPerWindow))) - 2 * w.wideHalo;
+    if (w.side < 16)
+        throw InvalidInputError("the memory budget is too small for a window of the raster at this radius (its halo is " +
+                                std::to_string(w.wideHalo) + " cells wide)");
+    return w;
+}
+
+/// A window's own cells [col, col + cols) × [row, row + rows) and the box read around them.
+struct Window {
+    int col = 0, row = 0, cols = 0, rows = 0;
+    std::array<int, 4> box{};  ///< x0, y0, x1, y1 of the cells read
+    bool wide = false;
+    Dem dem;
+    /// The cell index in the box of own cell (x, y).
+    std::size_t boxCell(int x, int y) const
+    {
+        return std::size_t(y - box[1]) * std::size_t(box[2] - box[0]) + std::size_t(x - box[0]);
+    }
+};
+
+/// Reads window (wx, wy) with the narrow halo, or the wide one if a nodata gap crosses the
+/// narrow one's edge: such a gap would be filled in the whole DEM but is a border in the
+/// window. A gap that crosses has a cell on the narrow window's outermost rows or columns
+/// (those on the DEM's edge excepted: there the whole DEM has the same border).
+Window readWindow(const DemSource& source, const WindowLayout& w, int wx, int wy)
+{
+    Window win;
+    win.col = wx * w.side, win.row = wy * w.side;
+    win.cols = std::min(w.side, w.width - win.col), win.rows = std::min(w.side, w.height - win.row);
+    const auto boxOf = [&](int halo) {
+        return std::array<int, 4>{std::max(0, win.col - halo), std::max(0, win.row - halo),
+                                  std::min(w.width, win.col + win.cols + halo), std::min(w.height, win.row + win.rows + halo)};
+    };
+    win.box = boxOf(w.narrowHalo);
+    win.dem = source.read(win.box[0], win.box[1], win.box[2] - win.box[0], win.box[3] - win.box[1]);
+    if (w.narrowHalo >= w.wideHalo) return win;
+    const int bw = win.box[2] - win.box[0], bh = win.box[3] - win.box[1];
+    const auto gap = [&](int x, int y) { return std::isnan(win.dem.heights[std::size_t(y) * std::size_t(bw) + std::size_t(x)]); };
+    bool crossed = false;
+    for (int x = 0; x < bw && !crossed; ++x)
+        crossed = (win.box[1] > 0 && gap(x, 0)) || (win.box[3] < w.height && gap(x, bh - 1));
+    for (int y = 0; y < bh && !crossed; ++y)
+        crossed = (win.box[0] > 0 && gap(0, y)) || (win.box[2] < w.width && gap(bw - 1, y));
+    if (crossed) {
+        win.box = boxOf(w.wideHalo);
+        win.dem = source.read(win.box[0], win.box[1], win.box[2] - win.box[0], win.box[3] - win.box[1]);
+        win.wide = true;
+    }
+    return win;
+}
+
+/// The bands of a computed window, per cell of its box. A cell with a height but in no
+/// triangle (no 2 × 2 block of heights around it) has no surface to compute on: it is
+/// nodata in every band but the height, `quality` included (a mesh's vertices keep a
+/// plane's value there, for viewers that do not check for NaN; GIS do).
+std::vector<std::vector<float>> bandsOf(const Window& win, const DemMesh& dm, const ComputeResult& r,
+                                        const std::vector<std::string>& bands)
+{
+    std::vector<VertexProperty> props = outputProperties(r.features, r.filledShare);
+    for (VertexProperty& p : props)
+        for (std::size_t v = 0; v < p.values.size(); ++v)
+            if (std::isnan(r.filledShare[v])) p.values[v] = std::numeric_limits<float>::quiet_NaN();  // in no face
+    std::vector<std::vector<float>> cells;
+    for (const std::string& name : bands) {
+        if (name == "height") {  // the DEM's own heights
+            cells.push_back(win.dem.heights);
+            continue;
+        }
+        const auto p = std::find_if(props.begin(), props.end(), [&](const VertexProperty& q) { return q.name == name; });
+        cells.push_back(toCells(dm, p->values));
+    }
+    return cells;
+}
+
+/// Computes window @p win; adds its diagnostics, masked own cells and cost to @p result;
+/// returns its bands per cell of its box (NaN throughout for a window without surface).
+std::vector<std::vector<float>> computeWindow(const Window& win, const WindowLayout& w, DiagnosticSum& diagnostics,
+                                              DemComputeResult& result, RunContext* context)
+{
+    const DemMesh dm = demToMesh(win.dem);
+    if (dm.mesh.numTriangles() == 0)
+        return std::vector<std::vector<float>>(result.bands.size(),
+                                               std::vector<float>(dm.vertexOfCell.size(), std::numeric_limits<float>::quiet_NaN()));
+    const ComputeResult r = compute(dm.mesh, w.options, context);
+    if (w.oneWindow) result.plan = r.plan;
+    for (const Diagnostic& d : r.diagnostics)
+        if (d.kind != "mostly_masked") diagnostics.add(d);  // counted below over the own cells
+    result.cost += r.cost;
+    result.prepareSeconds += r.preparation.seconds;
+    result.triangles += dm.mesh.numTriangles();
+    // The own cells in a face (a vertex in no face has no filled share), for the masked count.
+    std::vector<std::uint32_t> own;
+    for (int y = win.row; y < win.row + win.rows; ++y)
+        for (int x = win.col; x < win.col + win.cols; ++x) {
+            const std::uint32_t v = dm.vertexOfCell[win.boxCell(x, y)];
+            if (v != DemMesh::kNoVertex && !std::isnan(r.filledShare[v])) own.push_back(v);
+        }
+    result.masked.add(r.features, own);
+    return bandsOf(win, dm, r, result.bands);
+}
+
+/// Copies the own cells of @p cells (per cell of the window's box) into the output.
+void writeOwnCells(const Window& win, const std::vector<std::vector<float>>& cells, RasterPieceWriter& writer)
+{
+    std::vector<float> own(std::size_t(win.cols) * std::size_t(win.rows));
+    for (std::size_t b = 0; b < cells.size(); ++b) {
+        for (int y = 0; y < win.rows; ++y)
+            std::copy_n(cells[b].begin() + std::ptrdiff_t(win.boxCell(win.col, win.row + y)), win.cols,
+                        own.begin() + std::ptrdiff_t(std::size_t(y) * std::size_t(win.cols)));
+        writer.write(int(b), win.col, win.row, win.cols, win.rows, own.data());
+    }
+}
+
+/// The options' refusals, before anything is read.
+void checkOptions(const DemComputeOptions& options)
+{
+    const ComputeOptions& c = options.compute;
+    if (c.invariants.exact) throw InvalidInputError("the exact mode is for meshes, not rasters");
+    if (c.tiling.tilesPerAxis != 0 || c.tiling.onlyTile >= 0)
+        throw InvalidInputError("rasters are computed in windows; give their memory budget or size instead of tiles");
+    if (c.tiling.memoryBudget < 0 || !std::isfinite(c.tiling.memoryBudget))
+        throw InvalidInputError("the memory budget must be positive (or 0: the default)");
+    if (options.windowCells < 0) throw InvalidInputError("the window size must be positive (or 0: from the memory budget)");
+    std::string names;
+    for (const std::string& b : options.bands) names += b + ",";
+    if (!options.bands.empty()) parseFeatureNames(names, demBandNames(c));  // names one that cannot be given
+}
+
 } // namespace
+
+std::vector<std::string> demBandNames(const ComputeOptions& options)
+{
+    std::vector<std::string> names = outputPropertyNames(options.invariants.selected(), options.invariants.scales);
+    names.push_back("height");
+    return names;
+}
 
 DemComputeResult computeDem(const std::string& input, const std::string& output, const DemComputeOptions& options,
                             RunContext* context)
 {
-    const InvariantsOptions& asked = options.invariants;
-    if (asked.exact) throw InvalidInputError("the exact mode is for meshes, not rasters");
-    if (asked.memoryBudget != 0 || asked.tilesPerAxis != 0)
-        throw InvalidInputError("rasters are computed in windows; give their memory budget or size instead of tiles");
-    if (!(options.memoryBudget > 0)) throw InvalidInputError("the memory budget must be positive");
-    if (options.windowCells < 0) throw InvalidInputError("the window size must be positive (or 0: from the memory budget)");
-    const double radius = asked.radius;
-    const double maxHole = options.maxHolePerimeter >= 0 ? options.maxHolePerimeter : defaultMaxHolePerimeter(radius);
-
+    checkOptions(options);
     Stopwatch stage;
     DemComputeResult result;
     DemReadOptions ro;
     ro.band = options.band;
     const DemSource source(input, ro);
     result.input = source.info();
-    const RasterGeoreference& grid = result.input.georeference;
-    const std::array<double, 6>& t = grid.transform;
-    const int W = grid.width, H = grid.height;
-    // The shortest step between neighbouring cell centres on the ground.
-    const double cell = std::min(std::hypot(t[1], t[4]), std::hypot(t[2], t[5]));
-    // Peak bytes per cell of a window's computation at N = 16: about kBytesPerTileVertex with
-    // all four invariants, 1,150 with V and S alone (measured on 1M-cell DEMs, docs/terrain.md).
-    const double bytesPerCell = (asked.computePatch || asked.computeLine ? kBytesPerTileVertex : 1200.0) *
-                                std::max(1.0, asked.scales / 16.0);
-    const double cellsPerWindow = options.memoryBudget / bytesPerCell;
-    const bool oneWindow = options.windowCells == 0 ? double(W) * double(H) <= cellsPerWindow
-                                                    : options.windowCells >= std::max(W, H);
-
-    // Several windows share one plan, made on a window of 1024² cells at the centre. One
-    // window makes its own, as the mesh path would (then its values are exactly those of
-    // its mesh computed by the mesh path).
-    InvariantsOptions shared = asked;
-    PrepareMeshOptions po;
-    po.maxHolePerimeter = maxHole;
-    po.radius = radius;
-    if (!oneWindow) {
-        const int pc = std::min(W, 1024), pr = std::min(H, 1024);
-        const DemMesh pm = demToMesh(source.read((W - pc) / 2, (H - pr) / 2, pc, pr));
-        if (pm.mesh.numTriangles() == 0)
-            throw InvalidInputError(fileName(input) + ": the window at its centre has no surface to plan the "
-                                                      "computation on");
-        const InvariantsResult plan = prepareComputation(prepareMesh(pm.mesh, po).mesh, shared);
-        result.plan = plan.plan;
-        shared.voxelSize = plan.plan.voxelSize;
-        shared.vertexSpacing = shared.vertexSpacing > 0 ? shared.vertexSpacing : plan.stats.medianEdge;
-        const double midX = t[0] + 0.5 * W * t[1] + 0.5 * H * t[2], midY = t[3] + 0.5 * W * t[4] + 0.5 * H * t[5];
-        shared.localOrigin = Vec3{midX, midY, 0.5 * (plan.stats.bboxMin.z + plan.stats.bboxMax.z)};
-    }
-    // A window's own cells take their values from its mesh: the halo holds everything they
-    // depend on (the reach), a hole next to the window's edge that the whole raster would
-    // fill (at most half its perimeter across), and 4 voxels to spare.
-    result.haloCells = oneWindow ? 0 : int(std::ceil((result.plan.reach + 0.5 * maxHole + 4.0 * result.plan.voxelSize) / cell)) + 1;
-    const int narrowHalo = oneWindow ? 0 : int(std::ceil((result.plan.reach + 4.0 * result.plan.voxelSize) / cell)) + 1;
-    result.narrowHaloCells = narrowHalo;
-    int side = options.windowCells;
-    if (oneWindow) side = std::max(W, H);
-    else if (side == 0) side = int(std::floor(std::sqrt(cellsPerWindow))) - 2 * result.haloCells;
-    if (side < 16)
-        throw InvalidInputError("the memory budget is too small for a window of the raster at this radius (its halo is " +
-                                std::to_string(result.haloCells) + " cells wide)");
-    result.windowCells = side;
-    result.windowsPerRow = (W + side - 1) / side;
-    result.windowsPerColumn = (H + side - 1) / side;
+    DiagnosticSum diagnostics;
+    const WindowLayout w = layWindows(source, input, options, result);
+    for (const Diagnostic& d : result.diagnostics) diagnostics.add(d);  // the shared plan's
+    result.haloCells = w.wideHalo, result.narrowHaloCells = w.narrowHalo, result.windowCells = w.side;
+    result.windowsPerRow = (w.width + w.side - 1) / w.side;
+    result.windowsPerColumn = (w.height + w.side - 1) / w.side;
     result.bands = bandNames(options);
     result.readSeconds += stage.seconds();
 
-    RasterPieceWriter writer(output, grid, result.bands, options.output);
-    DiagnosticSum diagnostics;
-    std::vector<std::size_t> maskedPerRadius(std::size_t(asked.scales), 0);
+    RasterPieceWriter writer(output, result.input.georeference, result.bands, options.output);
     std::size_t ownCellsWithHeight = 0;
     const int windows = result.windowsPerRow * result.windowsPerColumn;
     for (int wy = 0; wy < result.windowsPerColumn; ++wy)
         for (int wx = 0; wx < result.windowsPerRow; ++wx) {
-            const int ownCol = wx * side, ownRow = wy * side;
-            const int ownCols = std::min(side, W - ownCol), ownRows = std::min(side, H - ownRow);
-            // The narrow halo (the reach) suffices unless a nodata gap crosses its edge: such a
-            // gap would be filled in the whole DEM but is a border in the window. A gap that
-            // crosses has a cell on the narrow window's outermost rows or columns (those on
-            // the DEM's edge excepted: there the whole DEM has the same border).
             stage.restart();
-            const auto windowOf = [&](int halo) {
-                return std::array<int, 4>{std::max(0, ownCol - halo), std::max(0, ownRow - halo),
-                                          std::min(W, ownCol + ownCols + halo), std::min(H, ownRow + ownRows + halo)};
-            };
-            std::array<int, 4> box = windowOf(narrowHalo);
-            Dem dem = source.read(box[0], box[1], box[2] - box[0], box[3] - box[1]);
-            if (narrowHalo < result.haloCells) {
-                const int w = box[2] - box[0], h = box[3] - box[1];
-                bool crossed = false;
-                const auto gap = [&](int x, int y) { return std::isnan(dem.heights[std::size_t(y) * std::size_t(w) + std::size_t(x)]); };
-                for (int x = 0; x < w && !crossed; ++x)
-                    crossed = (box[1] > 0 && gap(x, 0)) || (box[3] < H && gap(x, h - 1));
-                for (int y = 0; y < h && !crossed; ++y)
-                    crossed = (box[0] > 0 && gap(0, y)) || (box[2] < W && gap(w - 1, y));
-                if (crossed) {
-                    box = windowOf(result.haloCells);
-                    dem = source.read(box[0], box[1], box[2] - box[0], box[3] - box[1]);
-                    ++result.wideHaloWindows;
-                }
-            }
-            const int col0 = box[0], row0 = box[1], col1 = box[2];
-            const DemMesh dm = demToMesh(dem);
+            const Window win = readWindow(source, w, wx, wy);
+            result.wideHaloWindows += win.wide;
             result.readSeconds += stage.seconds();
-            const int window = wy * result.windowsPerRow + wx;
             if (context && windows > 1)
-                context->setPrefix("window " + std::to_string(window + 1) + " of " + std::to_string(windows) + ": ");
-
-            std::vector<std::vector<float>> cells;  // per band, the window's cells
-            if (dm.mesh.numTriangles() > 0) {
-                stage.restart();
-                const PrepareMeshResult prepared = prepareMesh(dm.mesh, po);
-                result.prepareSeconds += stage.seconds();
-                for (const Diagnostic& d : prepared.changes) diagnostics.add(d);
-                const InvariantsResult r = computeInvariants(prepared.mesh, shared, context);
-                if (oneWindow) result.plan = r.plan;
-                for (const Diagnostic& d : r.diagnostics)
-                    if (d.kind != "mostly_masked") diagnostics.add(d);  // counted below over own cells
-                const InvariantsCost& c = r.cost;
-                InvariantsCost& sum = result.cost;
-                sum.check += c.check, sum.levelSet += c.levelSet, sum.occupancy += c.occupancy;
-                sum.stencils += c.stencils, sum.interpolation += c.interpolation, sum.samples += c.samples;
-                sum.patchLine += c.patchLine, sum.total += c.total;
-                sum.levelSetVoxels += c.levelSetVoxels, sum.stencilNodes += c.stencilNodes, sum.numSamples += c.numSamples;
-                stage.restart();
-                std::vector<VertexProperty> props = featureProperties(r.features);
-                props.push_back({"filled_share", prepared.filledShare});
-                for (const std::string& name : result.bands) {
-                    if (name == "height") {  // the DEM's own heights
-                        cells.push_back(dem.heights);
-                        continue;
-                    }
-                    const auto p = std::find_if(props.begin(), props.end(), [&](const VertexProperty& q) { return q.name == name; });
-                    if (p == props.end()) {
-                        std::string names;
-                        for (const VertexProperty& q : props) names += (names.empty() ? "" : ", ") + q.name;
-                        throw InvalidInputError("no feature '" + name + "' to write (there are " + names + ", height)");
-                    }
-                    cells.push_back(toCells(dm, toInputVertices(prepared, p->values)));
-                }
-                // Masked values of the own cells, per radius, for the mostly-masked remark.
-                const std::vector<Invariant> present = r.features.invariants();
-                const FeatureColumns& first = r.features[present.front()];
-                const std::vector<std::uint32_t>& cellVertex = dm.vertexOfCell;
-                for (std::size_t j = 0; j < first.size(); ++j) {
-                    const std::vector<float> col = toInputVertices(prepared, first[j]);
-                    for (int y = ownRow; y < ownRow + ownRows; ++y)
-                        for (int x = ownCol; x < ownCol + ownCols; ++x) {
-                            const std::uint32_t v = cellVertex[std::size_t(y - row0) * std::size_t(col1 - col0) + std::size_t(x - col0)];
-                            if (v != DemMesh::kNoVertex && j < maskedPerRadius.size()) maskedPerRadius[j] += std::isnan(col[v]);
-                        }
-                }
-                result.triangles += dm.mesh.numTriangles();
-            } else if (oneWindow) {
-                throw InvalidInputError(fileName(input) + (dem.numValid == 0 ? " has no cell with a height (all nodata)"
-                                                                             : ": no 2 x 2 block of cells has heights, "
-                                                                               "so there is no surface to compute on"));
-            } else {
-                stage.restart();
-                cells.assign(result.bands.size(), std::vector<float>(dm.vertexOfCell.size(), std::numeric_limits<float>::quiet_NaN()));
-            }
-            for (int y = ownRow; y < ownRow + ownRows; ++y)
-                for (int x = ownCol; x < ownCol + ownCols; ++x)
-                    ownCellsWithHeight += dm.vertexOfCell[std::size_t(y - row0) * std::size_t(col1 - col0) + std::size_t(x - col0)] != DemMesh::kNoVertex;
-            // The own cells into their place.
-            std::vector<float> own(std::size_t(ownCols) * std::size_t(ownRows));
-            for (std::size_t b = 0; b < cells.size(); ++b) {
-                for (int y = 0; y < ownRows; ++y)
-                    std::copy_n(cells[b].begin() + std::ptrdiff_t(std::size_t(ownRow - row0 + y) * std::size_t(col1 - col0) +
-                                                                  std::size_t(ownCol - col0)),
-                                ownCols, own.begin() + std::ptrdiff_t(std::size_t(y) * std::size_t(ownCols)));
-                writer.write(int(b), ownCol, ownRow, ownCols, ownRows, own.data());
-            }
+                context->setPrefix("window " + std::to_string(wy * result.windowsPerRow + wx + 1) + " of " +
+                                   std::to_string(windows) + ": ");
+            if (w.oneWindow && win.dem.numValid == 0)
+                throw InvalidInputError(fileName(input) + " has no cell with a height (all nodata)");
+            const std::vector<std::vector<float>> cells = computeWindow(win, w, diagnostics, result, context);
+            if (w.oneWindow && result.triangles == 0)
+                throw InvalidInputError(fileName(input) +
+                                        ": no 2 x 2 block of cells has heights, so there is no surface to compute on");
+            stage.restart();
+            for (int y = win.row; y < win.row + win.rows; ++y)
+                for (int x = win.col; x < win.col + win.cols; ++x)
+                    ownCellsWithHeight += !std::isnan(win.dem.heights[win.boxCell(x, y)]);
+            writeOwnCells(win, cells, writer);
             result.writeSeconds += stage.seconds();
         }
     if (context) context->setPrefix("");
     if (ownCellsWithHeight == 0) throw InvalidInputError(fileName(input) + " has no cell with a height (all nodata)");
     result.input.numValid = ownCellsWithHeight;
-    for (std::size_t m : maskedPerRadius) result.maskedValues += m;
     result.diagnostics = diagnostics.list();
-    if (std::optional<Diagnostic> d = mostlyMasked(result.plan.radii, maskedPerRadius, ownCellsWithHeight))
+    if (std::optional<Diagnostic> d = result.masked.mostlyMasked(result.plan.radii))
         result.diagnostics.push_back(std::move(*d));
     stage.restart();
     writer.commit();

@@ -150,6 +150,14 @@ std::string readableBytes(double bytes)
 
 } // namespace
 
+double computationBytesPerVertex(const InvariantsOptions& options)
+{
+    const double atSixteen = options.computePatch || options.computeLine ? 1700.0 : 1200.0;
+    return atSixteen * std::max(1.0, options.scales / 16.0);
+}
+
+double haloWidth(const ScalePlan& plan) { return plan.reach + 4.0 * plan.voxelSize; }
+
 std::vector<int> tileOfVertices(const TriMesh& mesh, int tilesPerAxis)
 {
     if (tilesPerAxis < 1 || tilesPerAxis > 1024) throw InvalidInputError("the tiles per axis must be between 1 and 1024");
@@ -161,191 +169,152 @@ std::vector<int> tileOfVertices(const TriMesh& mesh, int tilesPerAxis)
 
 namespace {
 
-/// The tiled computation; with @p keepColumns the result columns for the whole mesh count
-/// against the memory budget (computeTiled), else not (computeTiles).
-InvariantsResult runTiles(const TriMesh& mesh, const InvariantsOptions& options, const TilingOptions& tiling, bool keepColumns,
-                       const TileSink& sink, TiledComputeInfo* info, RunContext* progress)
+/// The tile grid for a budget: the fewest tiles per axis whose largest grown tile fits.
+struct TilePlan {
+    TileGrid grid;
+    std::vector<std::size_t> sizes;  ///< vertices per grown tile
+    double fixedBytes = 0, perVertex = 0;
+    std::size_t largest() const { return *std::max_element(sizes.begin(), sizes.end()); }
+};
+
+TilePlan planTiles(const TriMesh& mesh, const InvariantsResult& whole, const InvariantsOptions& options,
+                   const TilingOptions& tiling, double halo)
 {
-    const Stopwatch total;
-    if (options.exact) throw InvalidInputError("the exact mode is not tiled (restrict it to chosen vertices instead)");
     if (tiling.memoryBudget < 0 || !std::isfinite(tiling.memoryBudget))
         throw InvalidInputError("the memory budget must be a positive number of bytes");
     if (tiling.tilesPerAxis < 0 || tiling.tilesPerAxis > 1024)
         throw InvalidInputError("the tiles per axis must be between 1 and 1024");
-    const InvariantsResult whole = prepareComputation(mesh, options);
-    const ScalePlan& plan = whole.plan;
-    // Border distances are searched up to the values' reach + 2 h_0 (computeInvariants).
-    const double halo = plan.reach + 4.0 * plan.voxelSize;
-
     // Memory: the mesh (points, triangles), the tiles' vertex and triangle lists (halos make
-    // the latter about 1.2-1.5 times the triangles) and local indices stay whole, and with
-    // keepColumns the result columns; each tile's computation comes on top.
-    const std::size_t nv = mesh.numVertices();
-    const int invariants = int(options.computeVolume) + int(options.computeSphere) +
-                           int(options.computePatch) + int(options.computeLine);
-    const double fixedBytes = double(nv) * (32.0 + (keepColumns ? 4.0 * invariants * options.scales : 0.0)) +
-                              double(mesh.numTriangles()) * 18.0;
-    const double perVertex = kBytesPerTileVertex * std::max(1.0, options.scales / 16.0);
-    int n = tiling.tilesPerAxis;
-    std::vector<std::size_t> sizes;
-    TileGrid grid;
-    if (n == 0) {
-        if (tiling.memoryBudget > 0 && tiling.memoryBudget <= fixedBytes)
+    // the latter about 1.2-1.5 times the triangles), local indices and what the caller
+    // reserves stay whole; each tile's computation comes on top.
+    TilePlan tp;
+    tp.fixedBytes = double(mesh.numVertices()) * 32.0 + double(mesh.numTriangles()) * 18.0 + tiling.reservedBytes;
+    tp.perVertex = computationBytesPerVertex(options);
+    const std::string whatStays = tiling.reservedBytes > 0 ? " the mesh and its results alone take " : " the mesh alone takes ";
+    if (tiling.tilesPerAxis > 0) {
+        tp.grid = makeGrid(whole.stats, tiling.tilesPerAxis);
+        tp.sizes = grownTileSizes(mesh, tp.grid, halo);
+        return tp;
+    }
+    if (tiling.memoryBudget > 0 && tiling.memoryBudget <= tp.fixedBytes)
+        throw InvalidInputError("the memory budget of " + readableBytes(tiling.memoryBudget) +
+                                " is too small for even one tile:" + whatStays + readableBytes(tp.fixedBytes));
+    const double allowed = tiling.memoryBudget > 0 ? (tiling.memoryBudget - tp.fixedBytes) / tp.perVertex
+                                                   : std::numeric_limits<double>::max();
+    const Vec3 ext = whole.stats.bboxMax - whole.stats.bboxMin;
+    const double longest = std::max({ext.x, ext.y, ext.z});
+    for (int n = 1;; ++n) {
+        tp.grid = makeGrid(whole.stats, n);
+        tp.sizes = grownTileSizes(mesh, tp.grid, halo);
+        if (double(tp.largest()) <= allowed) return tp;
+        // Tiles much narrower than their halo would be mostly halo: give up.
+        if (longest / n < 0.5 * halo || n >= 1024) {
+            std::ostringstream h;
+            h << std::setprecision(3) << halo;
             throw InvalidInputError("the memory budget of " + readableBytes(tiling.memoryBudget) +
-                                    " is too small for even one tile: the mesh" +
-                                    (keepColumns ? " and its results alone take " : " alone takes ") + readableBytes(fixedBytes));
-        const double allowed = tiling.memoryBudget > 0 ? (tiling.memoryBudget - fixedBytes) / perVertex
-                                                       : std::numeric_limits<double>::max();
-        const Vec3 ext = whole.stats.bboxMax - whole.stats.bboxMin;
-        const double longest = std::max({ext.x, ext.y, ext.z});
-        for (n = 1;; ++n) {
-            grid = makeGrid(whole.stats, n);
-            sizes = grownTileSizes(mesh, grid, halo);
-            if (double(*std::max_element(sizes.begin(), sizes.end())) <= allowed) break;
-            // Tiles much narrower than their halo would be mostly halo: give up.
-            if (longest / n < 0.5 * halo || n >= 1024) {
-                const double needed = fixedBytes + perVertex * double(*std::max_element(sizes.begin(), sizes.end()));
-                throw InvalidInputError("the memory budget of " + readableBytes(tiling.memoryBudget) +
-                                        " is too small for even one tile (tiles narrower than their halo of " +
-                                        [&] {
-                                            std::ostringstream h;
-                                            h << std::setprecision(3) << halo;
-                                            return h.str();
-                                        }() + " would still need about " + readableBytes(needed) +
-                                        "); raise the budget or use a smaller radius");
-            }
+                                    " is too small for even one tile (tiles narrower than their halo of " + h.str() +
+                                    " would still need about " +
+                                    readableBytes(tp.fixedBytes + tp.perVertex * double(tp.largest())) +
+                                    "); raise the budget or use a smaller radius");
         }
-    } else {
-        grid = makeGrid(whole.stats, n);
-        sizes = grownTileSizes(mesh, grid, halo);
     }
-    if (tiling.onlyTile >= n * n)
-        throw InvalidInputError("tile " + std::to_string(tiling.onlyTile) + " does not exist (there are " +
-                                std::to_string(n * n) + " tiles, 0 to " + std::to_string(n * n - 1) + ")");
+}
 
-    InvariantsResult result = whole;
-    result.features.radii = plan.radii;
+/// Tile @p t's triangles (its grown box's, in mesh order) as a mesh of their own; @p local
+/// (kNone outside the tile) and @p global map vertex numbers in and out of it.
+constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
-    // Each tile's own vertices and the triangles of its grown box, sorted out in one pass each.
-    const std::size_t numTiles = std::size_t(n) * std::size_t(n);
-    const Buckets ownVertices = bucketize(numTiles, nv, [&](std::size_t i, const auto& add) {
-        add(grid.tileOf(mesh.points[i]));
-    });
-    const Buckets tileTriangles = trianglesOfGrownTiles(mesh, grid, halo, tiling.onlyTile);
-    std::size_t tilesWithVertices = 0;
-    for (int t = 0; t < n * n; ++t) tilesWithVertices += ownVertices.begin(t) != ownVertices.end(t);
-    InvariantsOptions tileOptions = options;
-    tileOptions.memoryBudget = 0, tileOptions.tilesPerAxis = 0;  // each tile in one piece
-    tileOptions.vertexSpacing = options.vertexSpacing > 0 ? options.vertexSpacing : whole.stats.medianEdge;
-    constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+TriMesh extractTile(const TriMesh& mesh, const Buckets& tileTriangles, int t, std::vector<std::uint32_t>& local,
+                    std::vector<std::uint32_t>& global)
+{
+    TriMesh tile;
+    tile.triangles.reserve(std::size_t(tileTriangles.end(t) - tileTriangles.begin(t)));
+    for (const std::uint32_t* f = tileTriangles.begin(t); f != tileTriangles.end(t); ++f) {
+        const Triangle& tri = mesh.triangles[*f];
+        Triangle lt;
+        for (std::size_t k = 0; k < 3; ++k) {
+            std::uint32_t& l = local[tri[k]];
+            if (l == kNone) {
+                l = std::uint32_t(tile.points.size());
+                tile.points.push_back(mesh.points[tri[k]]);
+                global.push_back(tri[k]);
+            }
+            lt[k] = l;
+        }
+        tile.triangles.push_back(lt);
+    }
+    return tile;
+}
+
+/// Keeps the rows of @p own (global numbers) in every feature column, in that order.
+void keepOwnRows(FeatureSet& features, const std::vector<std::uint32_t>& own, const std::vector<std::uint32_t>& local)
+{
     const float nan = std::numeric_limits<float>::quiet_NaN();
-    std::size_t computed = 0, masked = 0;
-    std::vector<std::size_t> maskedPerRadius;  // vertices, per radius (mostlyMaskedWarning)
-    std::vector<std::uint32_t> local(nv, kNone), global;  // vertex numbers in and out of the tile
-    for (int t = 0; t < n * n; ++t) {
-        if (tiling.onlyTile >= 0 && t != tiling.onlyTile) continue;
-        if (ownVertices.begin(t) == ownVertices.end(t)) continue;
-        TileResult part;
-        part.tile = t;
-        part.vertices.assign(ownVertices.begin(t), ownVertices.end(t));
-        // The tile's triangles: those with a vertex in the grown tile, in mesh order.
-        TriMesh tile;
-        tile.triangles.reserve(std::size_t(tileTriangles.end(t) - tileTriangles.begin(t)));
-        for (const std::uint32_t* f = tileTriangles.begin(t); f != tileTriangles.end(t); ++f) {
-            const Triangle& tri = mesh.triangles[*f];
-            Triangle lt;
-            for (int k = 0; k < 3; ++k) {
-                std::uint32_t& l = local[tri[std::size_t(k)]];
-                if (l == kNone) {
-                    l = std::uint32_t(tile.points.size());
-                    tile.points.push_back(mesh.points[tri[std::size_t(k)]]);
-                    global.push_back(tri[std::size_t(k)]);
-                }
-                lt[std::size_t(k)] = l;
+    for (FeatureColumns& columns : features.columns)
+        for (std::vector<float>& column : columns) {
+            std::vector<float> kept(own.size());
+            for (std::size_t l = 0; l < kept.size(); ++l) {
+                const std::uint32_t li = local[own[l]];
+                kept[l] = li == kNone ? nan : column[li];
             }
-            tile.triangles.push_back(lt);
+            column.swap(kept);
         }
-        if (progress) {
-            const std::size_t tiles = tiling.onlyTile >= 0 ? 1 : tilesWithVertices;
-            progress->setPrefix("tile " + std::to_string(computed + 1) + " of " + std::to_string(tiles) + ": ");
-        }
-        InvariantsResult values = computeWithPlan(tile, tileOptions, plan, progress);  // the whole mesh's plan
-        if (progress) progress->setPrefix("");
-        tile = TriMesh();
-        // Keep the rows of the tile's own vertices, in their global order.
-        const auto own = [&](std::vector<std::vector<float>>& columns) {
-            for (std::vector<float>& column : columns) {
-                std::vector<float> kept(part.vertices.size());
-                for (std::size_t l = 0; l < kept.size(); ++l) {
-                    const std::uint32_t li = local[part.vertices[l]];
-                    kept[l] = li == kNone ? nan : column[li];
-                }
-                column.swap(kept);
-            }
-        };
-        for (FeatureColumns& columns : values.features.columns) own(columns);
-        for (std::uint32_t v : global) local[v] = kNone;
-        global.clear();
-        for (const auto& column : values.features[Invariant::Volume])  // counted as computeVolumeSphere does
-            for (float v : column) masked += std::isnan(v);
-        countMaskedVertices(values.features, maskedPerRadius);
-        const InvariantsCost& pt = values.cost;
-        InvariantsCost& rt = result.cost;
-        rt.levelSet += pt.levelSet, rt.occupancy += pt.occupancy, rt.stencils += pt.stencils;
-        rt.interpolation += pt.interpolation, rt.samples += pt.samples, rt.patchLine += pt.patchLine;
-        rt.levelSetVoxels += pt.levelSetVoxels;
-        rt.levelSetBytes = std::max(rt.levelSetBytes, pt.levelSetBytes);
-        rt.bandHalfWidth = pt.bandHalfWidth;
-        rt.stencilNodes += pt.stencilNodes, rt.numSamples += pt.numSamples;
-        rt.directEvaluations += pt.directEvaluations;
-        part.values = std::move(values);
-        sink(part);
-        ++computed;
-    }
-    result.cost.maskedValues = masked;
-    if (!whole.check.closed && tiling.onlyTile < 0)
-        if (std::optional<Diagnostic> d = mostlyMasked(plan.radii, maskedPerRadius, nv))
-            result.diagnostics.push_back(std::move(*d));
-    if (info) {
-        info->tilesPerAxis = n;
-        info->tiles = computed;
-        info->largestTileVertices = *std::max_element(sizes.begin(), sizes.end());
-        info->haloWidth = halo;
-        info->estimatedPeakBytes = fixedBytes + perVertex * double(info->largestTileVertices);
-    }
-    result.cost.total = total.seconds();
-    return result;
 }
 
 } // namespace
 
 InvariantsResult computeTiles(const TriMesh& mesh, const InvariantsOptions& options, const TilingOptions& tiling,
-                           const TileSink& sink, TiledComputeInfo* info, RunContext* progress)
+                              const TileSink& sink, TiledComputeInfo* info, RunContext* progress)
 {
-    return runTiles(mesh, options, tiling, false, sink, info, progress);
-}
+    const Stopwatch total;
+    if (options.exact) throw InvalidInputError("the exact mode is not tiled (restrict it to chosen vertices instead)");
+    InvariantsResult result = planInvariants(mesh, options);
+    const double halo = haloWidth(result.plan);
+    const TilePlan tp = planTiles(mesh, result, options, tiling, halo);
+    const int n = tp.grid.n;
+    if (tiling.onlyTile >= n * n)
+        throw InvalidInputError("tile " + std::to_string(tiling.onlyTile) + " does not exist (there are " +
+                                std::to_string(n * n) + " tiles, 0 to " + std::to_string(n * n - 1) + ")");
+    result.features.radii = result.plan.radii;
 
-InvariantsResult computeTiled(const TriMesh& mesh, const InvariantsOptions& options, const TilingOptions& tiling,
-                           TiledComputeInfo* info, RunContext* progress)
-{
-    // Result columns for the whole mesh, NaN until a tile fills them.
-    const std::size_t nv = mesh.numVertices();
-    const float nan = std::numeric_limits<float>::quiet_NaN();
-    FeatureSet all;
-    const auto scatter = [&](std::vector<std::vector<float>>& to, const std::vector<std::vector<float>>& from,
-                             const std::vector<std::uint32_t>& vertices) {
-        if (to.empty()) to.assign(from.size(), std::vector<float>(nv, nan));
-        for (std::size_t j = 0; j < from.size(); ++j)
-            for (std::size_t l = 0; l < vertices.size(); ++l) to[j][vertices[l]] = from[j][l];
-    };
-    InvariantsResult result = runTiles(
-        mesh, options, tiling, true,
-        [&](const TileResult& part) {
-            for (Invariant i : kAllInvariants) scatter(all[i], part.values.features[i], part.vertices);
-        },
-        info, progress);
-    all.radii = result.features.radii;
-    result.features = std::move(all);
+    // Each tile's own vertices and the triangles of its grown box, sorted out in one pass each.
+    const std::size_t nv = mesh.numVertices(), numTiles = std::size_t(n) * std::size_t(n);
+    const Buckets ownVertices = bucketize(numTiles, nv, [&](std::size_t i, const auto& add) {
+        add(tp.grid.tileOf(mesh.points[i]));
+    });
+    const Buckets tileTriangles = trianglesOfGrownTiles(mesh, tp.grid, halo, tiling.onlyTile);
+    std::size_t tilesWithVertices = 0;
+    for (int t = 0; t < n * n; ++t) tilesWithVertices += ownVertices.begin(t) != ownVertices.end(t);
+    InvariantsOptions tileOptions = options;
+    tileOptions.plan = result.plan;  // every tile takes the whole mesh's plan
+    std::size_t computed = 0;
+    std::vector<std::uint32_t> local(nv, kNone), global;  // vertex numbers in and out of the tile
+    for (int t = 0; t < n * n; ++t) {
+        if ((tiling.onlyTile >= 0 && t != tiling.onlyTile) || ownVertices.begin(t) == ownVertices.end(t)) continue;
+        TileResult part;
+        part.tile = t;
+        part.vertices.assign(ownVertices.begin(t), ownVertices.end(t));
+        if (progress) {
+            const std::size_t tiles = tiling.onlyTile >= 0 ? 1 : tilesWithVertices;
+            progress->setPrefix("tile " + std::to_string(computed + 1) + " of " + std::to_string(tiles) + ": ");
+        }
+        part.values = computeInvariants(extractTile(mesh, tileTriangles, t, local, global), tileOptions, progress);
+        if (progress) progress->setPrefix("");
+        keepOwnRows(part.values.features, part.vertices, local);
+        for (std::uint32_t v : global) local[v] = kNone;
+        global.clear();
+        result.cost += part.values.cost;
+        sink(part);
+        ++computed;
+    }
+    if (info) {
+        info->tilesPerAxis = n;
+        info->tiles = computed;
+        info->largestTileVertices = tp.largest();
+        info->haloWidth = halo;
+        info->estimatedPeakBytes = tp.fixedBytes + tp.perVertex * double(tp.largest());
+    }
+    result.cost.total = total.seconds();
     return result;
 }
 

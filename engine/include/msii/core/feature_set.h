@@ -24,6 +24,15 @@ char invariantLetter(Invariant invariant);
 /// The invariant of letter 'V', 'S', 'P' or 'L' (either case); none for other characters.
 std::optional<Invariant> invariantOfLetter(char letter);
 
+/// Parses a list of invariants as users write it, the same for the command line, Python and
+/// the JSON record: letters of V, S, P and L in any case, together or separated by commas or
+/// spaces ("VSPL", "V,S,P,L", "v, s" and "vs" are alike); order kept, each at most once.
+/// @throw InvalidInputError naming the entry that is not an invariant (or listed twice),
+///        with the ones that are.
+std::vector<Invariant> parseInvariantList(const std::string& text);
+/// The letters of @p invariants, e.g. "VSPL" (parseInvariantList reads it back).
+std::string invariantLetters(const std::vector<Invariant>& invariants);
+
 using FeatureColumns = std::vector<std::vector<float>>;  ///< [j][vertex], radius ascending
 
 /// Per-vertex features: for each invariant either no columns (not computed) or one column

@@ -62,8 +62,15 @@ struct ScalePlan {
     /// takes the whole mesh's (docs/method.md, Local frame). Outputs keep the input's
     /// coordinates.
     Vec3 origin;
+    /// The whole mesh's median edge length: P and L choose their route per level by it
+    /// (PatchLineOptions::vertexSpacing), so every piece of one surface chooses alike.
+    double vertexSpacing = 0;
     int numVolumeSphereLevels() const;
 };
+
+/// The local frame's origin (ScalePlan::origin) for a surface about @p centre: @p centre
+/// rounded to a multiple of 1024 h0 along each axis.
+Vec3 localOrigin(const Vec3& centre, double h0);
 
 /// The plan for @p radii with finest voxel @p h0 and the two precisions.
 /// @throw InvalidInputError for invalid radii (validateRadii) or a non-positive h0.

@@ -55,7 +55,6 @@ struct VolumeSphereResult {
     std::vector<int> levelOfRadius;            ///< grid level used for each radius (voxel h·2^level)
     int numLevels = 0;
     std::size_t numNodes = 0;                  ///< stencil evaluations (voxel centres), all levels
-    std::size_t numMaskedValues = 0;           ///< vertex·radius pairs set to NaN
     double occupancySeconds = 0, stencilSeconds = 0, interpolationSeconds = 0;
 };
 

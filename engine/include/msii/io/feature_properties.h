@@ -24,6 +24,27 @@ namespace msii {
 /// Copies the features into properties, in the order of the file comment.
 std::vector<VertexProperty> featureProperties(const FeatureSet& features);
 
+/// The properties msii compute writes: featureProperties, then `filled_share` (the share of
+/// hole fill in the largest ball, PrepareMeshResult::filledShare) if @p filledShare is given.
+std::vector<VertexProperty> outputProperties(const FeatureSet& features, std::vector<float> filledShare);
+
+/// The names of outputProperties for @p invariants at @p scales radii, in its order.
+std::vector<std::string> outputPropertyNames(const std::vector<Invariant>& invariants, int scales);
+
+/// Parses a list of feature names as users write them ("quality,V_04 s_16": separated by
+/// commas or spaces, any case), each matched to one of @p available and spelled as there.
+/// @throw InvalidInputError naming the first that is not available (with those that are),
+///        or if the list is empty.
+std::vector<std::string> parseFeatureNames(const std::string& text, const std::vector<std::string>& available);
+
+/// The formula of an invariant's normalised value, e.g. "V/|B_r|" or "L/(2 pi r)".
+std::string invariantFormula(Invariant invariant);
+/// The legend of the features written into outputs: "V_jj = V/|B_r|, S_jj = S/(4 pi r^2)
+/// (plane 0.5), P_jj = P/(pi r^2), L_jj = L/(2 pi r) (plane 1), r_j = j*R/N".
+std::string featureLegend();
+/// One invariant's convention as the JSON record states it, e.g. "P/(pi r^2), flat plane 1".
+std::string invariantConvention(Invariant invariant);
+
 /// The name of feature j (0-based) of invariant @p letter: "V_07" (two digits at least).
 std::string featureName(char letter, std::size_t j);
 

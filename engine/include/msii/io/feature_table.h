@@ -12,10 +12,6 @@
 
 namespace msii {
 
-/// Parses an invariant list such as "V", "v,p" or "V,S,P,L" (comma-separated, any case,
-/// each at most once, order kept). @throw InvalidInputError naming an unknown entry.
-std::vector<Invariant> parseInvariantList(const std::string& text);
-
 /// The feature table of @p invariants (in that order) from @p properties: for each, the
 /// properties <letter>_01, <letter>_02, … up to the first number missing.
 /// @throw InvalidInputError if an invariant has no <letter>_01 (the message lists the

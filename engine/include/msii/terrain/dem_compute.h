@@ -8,13 +8,13 @@
 ///
 /// All windows share one plan: the voxel size and P and L's vertex spacing from the central
 /// window's mesh, and the local frame's origin at the raster's centre; the halo reaches past
-/// everything a value depends on (ScalePlan::reach) plus 4 voxels, and where a nodata gap
-/// crosses its edge also the widest gap that is filled. So a window's own values are those
+/// everything a value depends on (tiling/tiled_compute.h, haloWidth), and where a nodata
+/// gap crosses its edge also the widest gap that is filled. So a window's own values are those
 /// of the whole raster computed as one piece, bit for bit (tested), and there are no seams.
 
 #include <msii/core/diagnostics.h>
 #include <msii/core/run_context.h>
-#include <msii/invariants/compute.h>
+#include <msii/pipeline/compute.h>
 #include <msii/terrain/dem.h>
 #include <msii/terrain/raster_output.h>
 
@@ -24,21 +24,24 @@
 namespace msii {
 
 struct DemComputeOptions {
-    /// radius, scales, precision, which invariants (not exact, not tiled: windows are the
-    /// tiling); voxelSize 0 = from the first window's mesh.
-    InvariantsOptions invariants;
+    /// What each window runs (pipeline/compute.h): radius, scales, precision, which
+    /// invariants (not exact); nodata gaps are holes, filled up to maxHolePerimeter (-1: πR).
+    /// tiling.memoryBudget sizes the windows (0: kDefaultDemMemoryBudget); windows are the
+    /// tiling, so no tilesPerAxis.
+    ComputeOptions compute;
     int band = 0;                   ///< DemReadOptions::band
-    double maxHolePerimeter = -1;   ///< nodata holes filled up to this perimeter; -1 = πR (defaultMaxHolePerimeter)
-    /// Features written, by name (featureProperties: V_01 …, quality, valid_radii, and
-    /// filled_share, and the input's `height`); empty = V at every radius (or the first
-    /// invariant computed) and quality.
+    /// Features written, by name (demBandNames: V_01 …, quality, valid_radii, filled_share
+    /// and the input's `height`); empty = V at every radius (or the first invariant
+    /// computed) and quality.
     std::vector<std::string> bands;
-    /// Memory for one window's computation, bytes; windows are sized to fit it.
-    double memoryBudget = 3e9;
-    /// Own cells per window side; 0 = from memoryBudget.
+    /// Own cells per window side; 0 = from the memory budget.
     int windowCells = 0;
     RasterOutputOptions output;     ///< description and metadata of the output raster
 };
+
+/// The names of the bands a DEM computation with @p options can write, for parseFeatureNames
+/// (io/feature_properties.h): the output properties, then `height`.
+std::vector<std::string> demBandNames(const ComputeOptions& options);
 
 struct DemComputeResult {
     Dem input;                     ///< the raster's grid, band and counts (heights left empty)
@@ -46,19 +49,20 @@ struct DemComputeResult {
     std::vector<std::string> bands;          ///< as written
     std::vector<Diagnostic> diagnostics;     ///< summed over the windows
     int windowsPerRow = 1, windowsPerColumn = 1, windowCells = 0;
-    /// The halo: narrow (the reach) unless a nodata gap crosses its edge, then wide (plus
+    /// The halo: narrow (haloWidth) unless a nodata gap crosses its edge, then wide (plus
     /// the widest gap filled); windows are sized for the wide one.
     int haloCells = 0, narrowHaloCells = 0;
     int wideHaloWindows = 0;       ///< windows that needed the wide halo
     std::size_t triangles = 0;     ///< of all windows' own squares
-    std::size_t maskedValues = 0;  ///< own cells' values of the first invariant masked (NaN), all radii
+    MaskedValues masked;           ///< over the own cells in a face of all windows
     InvariantsCost cost;           ///< summed over the windows
     double readSeconds = 0, prepareSeconds = 0, writeSeconds = 0;
 };
 
 /// Computes the invariants of the DEM @p input and writes the chosen features to @p output,
 /// a Cloud-Optimized GeoTIFF on the input's grid (terrain/raster_output.h), atomically.
-/// @throw InvalidInputError, IOError as readDem and writeRaster, and for unusable options.
+/// @throw InvalidInputError, IOError as readDem and writeRaster, and for unusable options
+///        (before any computation: a band that the options cannot give is named).
 DemComputeResult computeDem(const std::string& input, const std::string& output, const DemComputeOptions& options,
                             RunContext* context = nullptr);
 

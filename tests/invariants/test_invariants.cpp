@@ -1,9 +1,9 @@
-// The front door, computeInvariants: georeferenced coordinates (the local frame of
+// The invariants of a prepared mesh, computeInvariants: georeferenced coordinates (the local frame of
 // ScalePlan::origin) and cancellation through the RunContext.
 #include <msii/core/run_context.h>
-#include <msii/invariants/compute.h>
+#include <msii/invariants/invariants.h>
 #include <msii/samples/generators.h>
-#include <msii/tiling/tiled_compute.h>
+#include <msii/pipeline/compute.h>
 
 #include <gtest/gtest.h>
 
@@ -107,9 +107,13 @@ TEST(Compute, GeoreferencedCoordinatesComputeAsAtTheOrigin)
     EXPECT_LE(far.mean, 1e-3);
     EXPECT_LE(far.mean, 2.0 * near.mean);
 
-    InvariantsOptions tiled = o;
-    tiled.tilesPerAxis = 3;
-    d = differences(computeInvariants(moved(local, utm), tiled), b);
+    ComputeOptions tiled;  // through the pipeline, which computes in tiles
+    tiled.invariants = o;
+    tiled.tiling.tilesPerAxis = 3;
+    InvariantsResult parts;
+    parts.plan = b.plan;
+    parts.features = compute(moved(local, utm), tiled).features;
+    d = differences(parts, b);
     EXPECT_EQ(d.worst, 0.0);
     EXPECT_EQ(d.nanMismatches, 0u);
     EXPECT_GT(d.compared, 0u);

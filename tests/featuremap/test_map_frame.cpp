@@ -6,8 +6,8 @@
 /// shared edges, barycentrics that reproduce the pixel centres, the depth test from both
 /// sides, ties to the lower triangle index, the same result with 1 and 2 threads).
 
-#include <msii/map/map_frame.h>
-#include <msii/map/rasterize.h>
+#include <msii/featuremap/map_frame.h>
+#include <msii/featuremap/rasterize.h>
 
 #include <msii/core/errors.h>
 #include <msii/samples/generators.h>

@@ -5,11 +5,11 @@
 /// lossless compressions (bit-identical); atomic writing (no file on failure, no temporary
 /// files left); rejected properties, compressions and files.
 
-#include <msii/map/feature_map.h>
-#include <msii/map/half_floats.h>
+#include <msii/featuremap/feature_map.h>
+#include <msii/featuremap/half_floats.h>
 
 #include <msii/core/errors.h>
-#include <msii/map/map_frame.h>
+#include <msii/featuremap/map_frame.h>
 #include <msii/samples/generators.h>
 
 #include "../support/temp_dir.h"

@@ -1,9 +1,9 @@
-#include <msii/map/feature_map.h>
+#include <msii/featuremap/feature_map.h>
 
 #include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
 #include <msii/io/atomic_file.h>
-#include <msii/map/half_floats.h>
+#include <msii/featuremap/half_floats.h>
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>

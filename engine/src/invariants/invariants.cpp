@@ -1,5 +1,4 @@
-#include <msii/invariants/compute.h>
-#include <msii/tiling/tiled_compute.h>
+#include <msii/invariants/invariants.h>
 
 #include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
@@ -12,7 +11,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
 #include <limits>
 #include <sstream>
 
@@ -70,7 +68,7 @@ InvariantsResult checkComputation(const TriMesh& mesh, const InvariantsOptions& 
 
 } // namespace
 
-InvariantsResult prepareComputation(const TriMesh& mesh, const InvariantsOptions& options)
+InvariantsResult planInvariants(const TriMesh& mesh, const InvariantsOptions& options)
 {
     InvariantsResult result = checkComputation(mesh, options);
     const std::vector<double> radii = equidistantRadii(options.radius, options.scales);
@@ -92,10 +90,8 @@ InvariantsResult prepareComputation(const TriMesh& mesh, const InvariantsOptions
         throw InvalidInputError(msg.str());
     }
     result.plan = makeScalePlan(radii, h0, options.minVoxelsPerRadius, patchLinePrecision(options));
-    const double step = 1024.0 * h0;
-    const Vec3 centre = options.localOrigin ? *options.localOrigin : (result.stats.bboxMin + result.stats.bboxMax) * 0.5;
-    result.plan.origin = {std::round(centre.x / step) * step, std::round(centre.y / step) * step,
-                          std::round(centre.z / step) * step};
+    result.plan.origin = localOrigin((result.stats.bboxMin + result.stats.bboxMax) * 0.5, h0);
+    result.plan.vertexSpacing = result.stats.medianEdge;
     if (radii.front() < result.stats.medianEdge) {
         std::ostringstream msg;
         msg << "the smallest radius (" << radii.front() << ") is below the median edge length ("
@@ -111,42 +107,6 @@ InvariantsResult prepareComputation(const TriMesh& mesh, const InvariantsOptions
 double patchLinePrecision(const InvariantsOptions& options)
 {
     return options.patchLinePrecision > 0 ? options.patchLinePrecision : 4.0 / 3.0 * options.minVoxelsPerRadius;
-}
-
-void countMaskedVertices(const FeatureSet& features, std::vector<std::size_t>& counts)
-{
-    const std::vector<Invariant> present = features.invariants();
-    if (present.empty()) return;
-    const FeatureColumns& columns = features[present.front()];
-    counts.resize(columns.size(), 0);
-    for (std::size_t j = 0; j < columns.size(); ++j)
-        for (float v : columns[j]) counts[j] += std::isnan(v);
-}
-
-std::optional<Diagnostic> mostlyMasked(const std::vector<double>& radii, const std::vector<std::size_t>& maskedPerRadius,
-                                       std::size_t numVertices)
-{
-    if (numVertices == 0 || radii.empty() || maskedPerRadius.size() != radii.size()) return std::nullopt;
-    const auto share = [&](std::size_t j) { return double(maskedPerRadius[j]) / double(numVertices); };
-    const std::size_t last = radii.size() - 1;
-    if (share(last) <= 0.5) return std::nullopt;
-    std::ostringstream msg;
-    msg << std::setprecision(3) << int(std::lround(100.0 * share(last)))
-        << " % of the vertices are masked (NaN) at the largest radius " << radii[last]
-        << ", as their ball reaches a border of the open mesh (its edge or holes); ";
-    std::size_t kept = radii.size();  // the largest radius with at least half unmasked
-    for (std::size_t j = 0; j < radii.size(); ++j)
-        if (share(j) <= 0.5) kept = j;
-    if (kept == radii.size())
-        msg << "more than half are even at the smallest radius: fill the holes or use a much smaller largest radius";
-    else
-        msg << "at r = " << radii[kept] << " at least half have values: a smaller largest radius keeps more";
-    return Diagnostic{"mostly_masked",
-                      maskedPerRadius[last],
-                      {{"masked_share", share(last)},
-                       {"largest_radius", radii[last]},
-                       {"radius_with_half", kept == radii.size() ? 0.0 : radii[kept]}},
-                      msg.str()};
 }
 
 namespace {
@@ -207,7 +167,6 @@ void computeFastValues(const TriMesh& mesh, const InvariantsOptions& options, co
         if (options.computeVolume) result.features[Invariant::Volume] = std::move(vs.volume);
         result.features[Invariant::Sphere] = std::move(vs.sphere);
         result.cost.stencilNodes = vs.numNodes;
-        result.cost.maskedValues = options.computeVolume ? vs.numMaskedValues : 0;
         result.cost.occupancy = vs.occupancySeconds;
         result.cost.stencils = vs.stencilSeconds;
         result.cost.interpolation = vs.interpolationSeconds;
@@ -221,7 +180,7 @@ void computeFastValues(const TriMesh& mesh, const InvariantsOptions& options, co
         plOptions.computePatch = options.computePatch;
         plOptions.computeLine = options.computeLine;
         plOptions.borderDistance = border;
-        plOptions.vertexSpacing = options.vertexSpacing > 0 ? options.vertexSpacing : result.stats.medianEdge;
+        plOptions.vertexSpacing = plan.vertexSpacing > 0 ? plan.vertexSpacing : result.stats.medianEdge;
         PatchLineResult pl = computePatchLine(mesh, plOptions, context);
         result.features[Invariant::Patch] = std::move(pl.patch);
         result.features[Invariant::Line] = std::move(pl.line);
@@ -267,35 +226,51 @@ void computeLocalValues(const TriMesh& mesh, const InvariantsOptions& options, I
         computeExactValues(mesh, options, border, result, context);
     else
         computeFastValues(mesh, options, border, result, context);
-    if (!result.check.closed && !options.exact) {
-        std::vector<std::size_t> masked;
-        countMaskedVertices(result.features, masked);
-        if (std::optional<Diagnostic> d = mostlyMasked(result.plan.radii, masked, mesh.numVertices()))
-            result.diagnostics.push_back(std::move(*d));
-    }
 }
 
 } // namespace
 
-InvariantsResult computeWithPlan(const TriMesh& mesh, const InvariantsOptions& options, const ScalePlan& plan,
-                                 RunContext* context)
+void InvariantsOptions::select(const std::vector<Invariant>& list)
 {
-    if (options.exact) throw InvalidInputError("the exact mode is not tiled (restrict it to chosen vertices instead)");
-    InvariantsResult result = checkComputation(mesh, options);
-    result.plan = plan;
-    computeValues(mesh, options, result, context);
-    return result;
+    const auto has = [&](Invariant i) { return std::find(list.begin(), list.end(), i) != list.end(); };
+    computeVolume = has(Invariant::Volume);
+    computeSphere = has(Invariant::Sphere);
+    computePatch = has(Invariant::Patch);
+    computeLine = has(Invariant::Line);
+}
+
+std::vector<Invariant> InvariantsOptions::selected() const
+{
+    std::vector<Invariant> list;
+    for (const auto& [on, i] : {std::pair{computeVolume, Invariant::Volume}, std::pair{computeSphere, Invariant::Sphere},
+                                std::pair{computePatch, Invariant::Patch}, std::pair{computeLine, Invariant::Line}})
+        if (on) list.push_back(i);
+    return list;
+}
+
+InvariantsCost& InvariantsCost::operator+=(const InvariantsCost& piece)
+{
+    bandHalfWidth = std::max(bandHalfWidth, piece.bandHalfWidth);
+    levelSetVoxels += piece.levelSetVoxels;
+    levelSetBytes = std::max(levelSetBytes, piece.levelSetBytes);
+    stencilNodes += piece.stencilNodes;
+    numSamples += piece.numSamples;
+    directEvaluations += piece.directEvaluations;
+    check += piece.check, levelSet += piece.levelSet, occupancy += piece.occupancy, stencils += piece.stencils;
+    interpolation += piece.interpolation, samples += piece.samples, patchLine += piece.patchLine;
+    exact += piece.exact, total += piece.total;
+    return *this;
 }
 
 InvariantsResult computeInvariants(const TriMesh& mesh, const InvariantsOptions& options, RunContext* context)
 {
-    if (options.memoryBudget != 0 || options.tilesPerAxis != 0) {
-        TilingOptions tiling;
-        tiling.memoryBudget = options.memoryBudget;
-        tiling.tilesPerAxis = options.tilesPerAxis;
-        return computeTiled(mesh, options, tiling, nullptr, context);
+    InvariantsResult result;
+    if (options.plan) {  // a piece of a surface planned whole
+        result = checkComputation(mesh, options);
+        result.plan = *options.plan;
+    } else {
+        result = planInvariants(mesh, options);
     }
-    InvariantsResult result = prepareComputation(mesh, options);
     computeValues(mesh, options, result, context);
     return result;
 }

@@ -1,4 +1,4 @@
-#include <msii/map/map_frame.h>
+#include <msii/featuremap/map_frame.h>
 
 #include <msii/core/errors.h>
 

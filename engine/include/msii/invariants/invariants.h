@@ -1,8 +1,10 @@
 #pragma once
-/// @file compute.h
-/// @brief The whole per-mesh job of `msii compute`: check the mesh, choose the voxel size,
-/// build the level set, compute the invariants, mask what reaches a border. I/O is left to
-/// the caller (tools/msii), so tests and other programs run exactly what users run.
+/// @file invariants.h
+/// @brief The invariants of a prepared mesh: check it, plan the scales (voxel size, grid
+/// levels, reach), build the level set and compute V, S, P and L at N radii, fast or exact,
+/// with values masked where a ball reaches a border. The whole pipeline, from a mesh as read
+/// to values per input vertex, is pipeline/compute.h; tiles (tiling/) and DEM windows
+/// (terrain/) are pieces computed here with one shared plan.
 
 #include <msii/core/diagnostics.h>
 #include <msii/core/feature_set.h>
@@ -39,18 +41,15 @@ struct InvariantsOptions {
     /// exactVertices only (all vertices if empty); the others are NaN. Slow: for checking.
     bool exact = false;
     std::vector<std::uint32_t> exactVertices;
-    /// The whole mesh's median edge length, for P and L's choice of route per level
-    /// (PatchLineOptions::vertexSpacing); 0 = this mesh's. Tiles get the whole mesh's.
-    double vertexSpacing = 0;
-    /// Near where the local frame's origin goes (ScalePlan::origin, rounded to 1024 voxels);
-    /// unset: the mesh's bounding-box centre. Pieces of one surface computed apart (the
-    /// windows of a DEM) pass the same point, so that their values are those of one piece.
-    std::optional<Vec3> localOrigin;
-    /// Tiling, for meshes larger than memory (tiling/tiled_compute.h): tiles whose
-    /// computation fits in this many bytes, or tilesPerAxis × tilesPerAxis tiles; 0 and 0:
-    /// one piece. The values equal those of one piece bit for bit. Not with `exact`.
-    double memoryBudget = 0;
-    int tilesPerAxis = 0;
+    /// A plan made beforehand (planInvariants) on the whole surface, for its pieces computed
+    /// apart (tiles, DEM windows): with it every piece's values are those of one piece, bit
+    /// for bit. Unset: planned on this mesh (voxelSize, precisions and radius as above).
+    std::optional<ScalePlan> plan;
+
+    /// Selects the invariants of @p list (and no others).
+    void select(const std::vector<Invariant>& list);
+    /// The selected invariants, in the order V, S, P, L.
+    std::vector<Invariant> selected() const;
 };
 
 /// What a computation cost: sizes, counts and time per stage (not results).
@@ -60,11 +59,14 @@ struct InvariantsCost {
     std::size_t stencilNodes = 0;                     ///< V and S stencil evaluations, all levels
     std::size_t numSamples = 0;                       ///< P and L samples on the finest level
     std::size_t directEvaluations = 0;                ///< PatchLineResult::directEvaluations
-    std::size_t maskedValues = 0;                     ///< vertex·radius pairs of V masked (NaN)
     /// Seconds per stage; P and L: sampling the surface, kernel sums.
     double check = 0, levelSet = 0, occupancy = 0, stencils = 0, interpolation = 0;
     double samples = 0, patchLine = 0, exact = 0;
     double total = 0;
+
+    /// Adds the cost of another piece: counts and seconds summed, the largest level set's
+    /// bytes (pieces are computed one after the other).
+    InvariantsCost& operator+=(const InvariantsCost& piece);
 };
 
 struct InvariantsResult {
@@ -88,33 +90,17 @@ double patchLinePrecision(const InvariantsOptions& options);
 double chooseVoxelSize(double medianEdge, const std::vector<double>& radii,
                        double minVoxelsPerRadius);
 
-/// The checks and set-up of computeInvariants without the computation: parameters, mesh
-/// check, statistics, the scale plan and diagnostics, in a result without features. The
-/// tiled computation plans on the whole mesh with it.
+/// The checks and the plan of computeInvariants without the computation: parameters, mesh
+/// check, statistics, the scale plan and its diagnostics, in a result without features. A
+/// surface computed in pieces is planned whole with it, and each piece gets the plan
+/// (InvariantsOptions::plan).
 /// @throw InvalidInputError as computeInvariants.
-InvariantsResult prepareComputation(const TriMesh& mesh, const InvariantsOptions& options);
+InvariantsResult planInvariants(const TriMesh& mesh, const InvariantsOptions& options);
 
-/// computeInvariants on one piece (untiled, not exact) with a plan made beforehand: the
-/// tiles of a tiled computation, which all take the whole mesh's plan.
-/// @throw InvalidInputError as computeInvariants.
-InvariantsResult computeWithPlan(const TriMesh& mesh, const InvariantsOptions& options, const ScalePlan& plan,
-                                 RunContext* context = nullptr);
-
-/// Adds to @p counts (resized to the radii) the vertices whose value is NaN at each radius,
-/// in the first invariant computed (V, S, P, L): the masked ones, for a sum over tiles.
-void countMaskedVertices(const FeatureSet& features, std::vector<std::size_t>& counts);
-
-/// The "mostly_masked" diagnostic when more than half of @p numVertices are masked at the
-/// largest radius (their ball reaches a border of the open mesh: many holes, or a radius
-/// large for the patch), with the largest radius at which at least half have values
-/// (figure radius_with_half, 0 if none); none otherwise.
-std::optional<Diagnostic> mostlyMasked(const std::vector<double>& radii,
-                                       const std::vector<std::size_t>& maskedPerRadius, std::size_t numVertices);
-
-/// Runs the job on @p mesh, which must be usable as it is: prepare scans first with
-/// mesh/prepare_mesh.h (repair, hole filling), which is what `msii compute` does. The one
-/// entry point for fast, exact and tiled runs (options.exact, options.memoryBudget /
-/// tilesPerAxis); tiling/tiled_compute.h also streams tiles to a sink.
+/// Computes the invariants of @p mesh, which must be usable as it is (consistently
+/// oriented, no degenerate or duplicate faces): pipeline/compute.h prepares a mesh as read
+/// and maps the values back to its vertices, which is what `msii compute` runs. Fast or
+/// exact (options.exact), in one piece; pipeline/compute.h also computes in tiles.
 /// @throw InvalidInputError for unusable meshes or parameters, with one clear sentence.
 InvariantsResult computeInvariants(const TriMesh& mesh, const InvariantsOptions& options,
                                 RunContext* context = nullptr);

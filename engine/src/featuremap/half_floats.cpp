@@ -1,4 +1,4 @@
-#include <msii/map/half_floats.h>
+#include <msii/featuremap/half_floats.h>
 
 #include <Imath/half.h>
 

@@ -1,7 +1,7 @@
-#include <msii/mesh/read_mesh.h>
+#include <msii/io/read_mesh.h>
 
 #include <msii/core/errors.h>
-#include <msii/mesh/read_ply.h>
+#include <msii/io/read_ply.h>
 
 #include <OpenMesh/Core/IO/IOManager.hh>
 #include <OpenMesh/Core/IO/Options.hh>

@@ -1,4 +1,4 @@
-#include <msii/mesh/read_ply.h>
+#include <msii/io/read_ply.h>
 
 #include <msii/core/errors.h>
 

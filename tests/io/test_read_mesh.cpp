@@ -4,8 +4,8 @@
 
 #include <msii/core/errors.h>
 #include <msii/io/write_ply.h>
-#include <msii/mesh/read_mesh.h>
-#include <msii/mesh/read_ply.h>
+#include <msii/io/read_mesh.h>
+#include <msii/io/read_ply.h>
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include <msii/map/rasterize.h>
+#include <msii/featuremap/rasterize.h>
 
 #include <msii/mesh/vertex_normals.h>
 

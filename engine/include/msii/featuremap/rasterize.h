@@ -5,7 +5,7 @@
 /// can be interpolated at each pixel.
 
 #include <msii/core/run_context.h>
-#include <msii/map/map_frame.h>
+#include <msii/featuremap/map_frame.h>
 #include <msii/mesh/vertex_normals.h>
 #include <msii/mesh/trimesh.h>
 

@@ -17,8 +17,8 @@
 /// vector; empty when unknown), and the standard `comments`.
 
 #include <msii/core/run_context.h>
-#include <msii/map/map_frame.h>
-#include <msii/map/rasterize.h>
+#include <msii/featuremap/map_frame.h>
+#include <msii/featuremap/rasterize.h>
 #include <msii/mesh/trimesh.h>
 
 #include <map>

@@ -2,7 +2,7 @@
 /// @file read_ply.h
 /// @brief msii's own PLY reader (see read_mesh.h for why it is not OpenMesh's).
 
-#include <msii/mesh/read_mesh.h>
+#include <msii/io/read_mesh.h>
 
 namespace msii {
 

@@ -1,0 +1,182 @@
+#include <msii/pipeline/compute.h>
+
+#include <msii/core/errors.h>
+#include <msii/core/stopwatch.h>
+#include <msii/mesh/prepare_mesh.h>
+
+#include <limits>
+#include <string>
+#include <utility>
+
+namespace msii {
+namespace {
+
+/// Stage 1: the prepared mesh, and what preparation did into @p result.
+PrepareMeshResult prepare(const TriMesh& input, const ComputeOptions& options, ComputeResult& result)
+{
+    const Stopwatch watch;
+    PrepareMeshOptions po;
+    po.repair = options.repair;
+    po.radius = options.invariants.radius;
+    po.maxHolePerimeter =
+        options.maxHolePerimeter >= 0 ? options.maxHolePerimeter : defaultMaxHolePerimeter(options.invariants.radius);
+    PrepareMeshResult prepared = prepareMesh(input, po);
+    PreparationSummary& s = result.preparation;
+    s.changes = prepared.changes;
+    s.holes = prepared.holes;
+    s.maxHolePerimeter = po.maxHolePerimeter;
+    s.isolatedVertices = prepared.numIsolatedVertices;
+    s.vertices = prepared.mesh.numVertices();
+    s.faces = prepared.mesh.numTriangles();
+    s.seconds = watch.seconds();
+    result.diagnostics = prepared.changes;
+    return prepared;
+}
+
+/// The invariants' options on the prepared mesh: the exact mode's vertices renumbered.
+InvariantsOptions onPrepared(const ComputeOptions& options, const PrepareMeshResult& prepared)
+{
+    InvariantsOptions o = options.invariants;
+    for (std::uint32_t& v : o.exactVertices) {
+        if (v >= prepared.preparedOf.size())
+            throw InvalidInputError("vertex " + std::to_string(v) + " chosen for the exact mode does not exist (the mesh has " +
+                                    std::to_string(prepared.preparedOf.size()) + " vertices)");
+        if (prepared.preparedOf[v] == PrepareMeshResult::kNoVertex)
+            throw InvalidInputError("vertex " + std::to_string(v) + " chosen for the exact mode belongs to no face");
+        v = prepared.preparedOf[v];
+    }
+    return o;
+}
+
+/// Rows @p rows of every column of @p values, in that order.
+FeatureSet rowsOf(const FeatureSet& values, const std::vector<std::uint32_t>& rows)
+{
+    FeatureSet out;
+    out.radii = values.radii;
+    for (Invariant i : values.invariants())
+        for (const std::vector<float>& column : values[i]) {
+            std::vector<float> picked(rows.size());
+            for (std::size_t k = 0; k < rows.size(); ++k) picked[k] = column[rows[k]];
+            out[i].push_back(std::move(picked));
+        }
+    return out;
+}
+
+/// The input vertices of prepared vertices @p prepared (rows of their values): each input
+/// vertex once, with the row of its prepared vertex.
+void inputsOf(const InputVertexLists& lists, const std::vector<std::uint32_t>& prepared, ComputedPiece& piece,
+              std::vector<std::uint32_t>& rows)
+{
+    for (std::size_t l = 0; l < prepared.size(); ++l)
+        for (std::size_t k = lists.offsets[prepared[l]]; k < lists.offsets[prepared[l] + 1]; ++k) {
+            piece.vertices.push_back(lists.inputs[k]);
+            rows.push_back(std::uint32_t(l));
+        }
+}
+
+/// Columns of the input's vertices, NaN until a piece fills them.
+void scatter(const ComputedPiece& piece, std::size_t numInputVertices, ComputeResult& result)
+{
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (Invariant i : piece.features.invariants()) {
+        FeatureColumns& to = result.features[i];
+        const FeatureColumns& from = piece.features[i];
+        if (to.empty()) to.assign(from.size(), std::vector<float>(numInputVertices, nan));
+        for (std::size_t j = 0; j < from.size(); ++j)
+            for (std::size_t k = 0; k < piece.vertices.size(); ++k) to[j][piece.vertices[k]] = from[j][k];
+    }
+    if (result.filledShare.empty()) result.filledShare.assign(numInputVertices, nan);
+    for (std::size_t k = 0; k < piece.vertices.size(); ++k) result.filledShare[piece.vertices[k]] = piece.filledShare[k];
+}
+
+/// Stages 2 to 4 in one piece: the prepared mesh's values, mapped to the input's vertices.
+void computeWhole(const PrepareMeshResult& prepared, const InvariantsOptions& options, const PieceSink* sink,
+                  ComputeResult& result, RunContext* context)
+{
+    InvariantsResult r = computeInvariants(prepared.mesh, options, context);
+    result.plan = r.plan, result.stats = r.stats, result.check = r.check, result.cost = r.cost;
+    result.diagnostics.insert(result.diagnostics.end(), r.diagnostics.begin(), r.diagnostics.end());
+    std::vector<std::uint32_t> inFace;  // the input vertices in a face
+    for (std::uint32_t v = 0; v < prepared.preparedOf.size(); ++v)
+        if (prepared.preparedOf[v] != PrepareMeshResult::kNoVertex) inFace.push_back(v);
+    if (sink) {
+        ComputedPiece piece;
+        piece.features = rowsOf(r.features, [&] {
+            std::vector<std::uint32_t> rows;
+            for (std::uint32_t v : inFace) rows.push_back(prepared.preparedOf[v]);
+            return rows;
+        }());
+        piece.vertices = std::move(inFace);
+        piece.plan = r.plan;
+        for (std::uint32_t v : piece.vertices) piece.filledShare.push_back(prepared.filledShare[prepared.preparedOf[v]]);
+        if (!options.exact) result.masked.add(piece.features);
+        (*sink)(piece);
+        return;
+    }
+    result.features.radii = r.features.radii;
+    for (Invariant i : r.features.invariants())
+        for (std::vector<float>& column : r.features[i]) {
+            result.features[i].push_back(toInputVertices(prepared, column));
+            std::vector<float>().swap(column);
+        }
+    result.filledShare = toInputVertices(prepared, prepared.filledShare);
+    if (!options.exact) result.masked.add(result.features, inFace);
+}
+
+/// Stages 2 to 4 in tiles: each tile's values mapped to the input's vertices as it comes.
+void computeTiled(const PrepareMeshResult& prepared, const InvariantsOptions& options, const TilingOptions& tiling,
+                  std::size_t numInputVertices, const PieceSink* sink, ComputeResult& result, RunContext* context)
+{
+    TilingOptions t = tiling;
+    if (!sink)  // the whole result's columns stay while the tiles are computed
+        t.reservedBytes += 4.0 * double(numInputVertices) * double(options.selected().size() * options.scales + 1);
+    const InputVertexLists lists = inputVerticesOf(prepared);
+    const auto handOn = [&](const TileResult& part) {
+        ComputedPiece piece;
+        std::vector<std::uint32_t> rows;  // of part.vertices, for each input vertex
+        inputsOf(lists, part.vertices, piece, rows);
+        piece.plan = part.values.plan;
+        piece.features = rowsOf(part.values.features, rows);
+        for (std::uint32_t row : rows) piece.filledShare.push_back(prepared.filledShare[part.vertices[row]]);
+        result.masked.add(piece.features);
+        if (sink) (*sink)(piece);
+        else scatter(piece, numInputVertices, result);
+    };
+    InvariantsResult r = computeTiles(prepared.mesh, options, t, handOn, &result.tiling, context);
+    result.tiled = true;
+    result.plan = r.plan, result.stats = r.stats, result.check = r.check, result.cost = r.cost;
+    result.diagnostics.insert(result.diagnostics.end(), r.diagnostics.begin(), r.diagnostics.end());
+    result.features.radii = r.plan.radii;
+}
+
+ComputeResult run(const TriMesh& input, const ComputeOptions& options, const PieceSink* sink, RunContext* context)
+{
+    if (options.tiling.tiled() && options.invariants.exact)
+        throw InvalidInputError("the exact mode is not tiled (restrict it to chosen vertices instead)");
+    ComputeResult result;
+    const PrepareMeshResult prepared = prepare(input, options, result);
+    const InvariantsOptions invariants = onPrepared(options, prepared);
+    if (options.tiling.tiled())
+        computeTiled(prepared, invariants, options.tiling, input.numVertices(), sink, result, context);
+    else
+        computeWhole(prepared, invariants, sink, result, context);
+    if (!invariants.exact && !result.check.closed && options.tiling.onlyTile < 0)
+        if (std::optional<Diagnostic> d = result.masked.mostlyMasked(result.plan.radii))
+            result.diagnostics.push_back(std::move(*d));
+    return result;
+}
+
+} // namespace
+
+ComputeResult compute(const TriMesh& input, const ComputeOptions& options, RunContext* context)
+{
+    return run(input, options, nullptr, context);
+}
+
+ComputeResult computeStreamed(const TriMesh& input, const ComputeOptions& options, const PieceSink& sink,
+                              RunContext* context)
+{
+    return run(input, options, &sink, context);
+}
+
+} // namespace msii

@@ -1,0 +1,60 @@
+#include <msii/pipeline/masked_values.h>
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+namespace msii {
+
+void MaskedValues::add(const FeatureSet& features, const std::vector<std::uint32_t>& rows)
+{
+    const std::vector<Invariant> present = features.invariants();
+    if (present.empty()) return;
+    const FeatureColumns& columns = features[present.front()];
+    perRadius.resize(columns.size(), 0);
+    const std::size_t count = rows.empty() ? features.numVertices() : rows.size();
+    for (std::size_t j = 0; j < columns.size(); ++j) {
+        const std::vector<float>& column = columns[j];
+        std::size_t masked = 0;
+        if (rows.empty())
+            for (float v : column) masked += std::isnan(v);
+        else
+            for (std::uint32_t i : rows) masked += std::isnan(column[i]);
+        perRadius[j] += masked;
+    }
+    vertices += count;
+}
+
+std::size_t MaskedValues::total() const
+{
+    std::size_t sum = 0;
+    for (std::size_t m : perRadius) sum += m;
+    return sum;
+}
+
+std::optional<Diagnostic> MaskedValues::mostlyMasked(const std::vector<double>& radii) const
+{
+    if (vertices == 0 || radii.empty() || perRadius.size() != radii.size()) return std::nullopt;
+    const auto share = [&](std::size_t j) { return double(perRadius[j]) / double(vertices); };
+    const std::size_t last = radii.size() - 1;
+    if (share(last) <= 0.5) return std::nullopt;
+    std::ostringstream msg;
+    msg << std::setprecision(3) << int(std::lround(100.0 * share(last)))
+        << " % of the vertices are masked (NaN) at the largest radius " << radii[last]
+        << ", as their ball reaches a border of the open mesh (its edge or holes); ";
+    std::size_t kept = radii.size();  // the largest radius with at least half unmasked
+    for (std::size_t j = 0; j < radii.size(); ++j)
+        if (share(j) <= 0.5) kept = j;
+    if (kept == radii.size())
+        msg << "more than half are even at the smallest radius: fill the holes or use a much smaller largest radius";
+    else
+        msg << "at r = " << radii[kept] << " at least half have values: a smaller largest radius keeps more";
+    return Diagnostic{"mostly_masked",
+                      perRadius[last],
+                      {{"masked_share", share(last)},
+                       {"largest_radius", radii[last]},
+                       {"radius_with_half", kept == radii.size() ? 0.0 : radii[kept]}},
+                      msg.str()};
+}
+
+} // namespace msii

@@ -1,0 +1,123 @@
+// The DEM engine in process (terrain/dem_compute.h): a generated GeoTIFF with nodata
+// patches, computed in one window and in windows with halos, has the values of the
+// pipeline (pipeline/compute.h) run on the DEM's whole mesh, bit for bit, cell by cell; a
+// band that the options cannot give is refused before any computation, naming those that
+// can; masked values are counted over the own cells.
+#include <msii/core/errors.h>
+#include <msii/io/feature_properties.h>
+#include <msii/pipeline/compute.h>
+#include <msii/samples/generators.h>
+#include <msii/terrain/dem.h>
+#include <msii/terrain/dem_compute.h>
+#include <msii/terrain/raster_output.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "../support/temp_dir.h"
+
+using namespace msii;
+
+namespace {
+
+/// A 60 × 45 m terrain in 0.5 m cells with 8 nodata patches, as a GeoTIFF.
+std::string demFile(const test::TempDir& dir)
+{
+    samples::DemSampleOptions d;
+    d.surface.kind = samples::HeightFieldKind::Terrain;
+    d.surface.width = 60;
+    d.surface.height = 45;
+    d.surface.spacing = 0.5;
+    d.surface.relief = 4;
+    d.surface.seed = 7;
+    d.nodataPatches = 8;
+    d.patchRadius = 2.0;
+    const Dem dem = samples::makeDem(d);
+    const std::string path = dir.file("dem.tif");
+    RasterOutputOptions ro;
+    ro.nodata = -9999.0;
+    writeRaster(path, dem.georeference, {{"height", dem.heights}}, ro);
+    return path;
+}
+
+DemComputeOptions demOptions()
+{
+    DemComputeOptions o;
+    o.compute.invariants.radius = 4;
+    o.compute.invariants.scales = 4;
+    o.bands = {"V_02", "V_04", "S_04", "P_04", "L_04", "quality", "filled_share", "height"};
+    return o;
+}
+
+bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 0; }
+
+} // namespace
+
+TEST(DemCompute, WindowsEqualThePipelineOnTheWholeMesh)
+{
+    const test::TempDir dir;
+    const std::string input = demFile(dir);
+    DemComputeOptions o = demOptions();
+    const DemComputeResult one = computeDem(input, dir.file("one.tif"), o);
+    EXPECT_EQ(one.windowsPerRow * one.windowsPerColumn, 1);
+    o.windowCells = 40;
+    const DemComputeResult windows = computeDem(input, dir.file("windows.tif"), o);
+    EXPECT_EQ(windows.windowsPerRow, 3);
+    EXPECT_EQ(windows.windowsPerColumn, 3);
+    EXPECT_GT(windows.narrowHaloCells, 0);
+    EXPECT_EQ(windows.masked.total(), one.masked.total());
+    EXPECT_EQ(windows.masked.vertices, one.masked.vertices);
+
+    // The same surface through the pipeline, as a mesh: the DEM's cells are its vertices.
+    const DemMesh dm = demToMesh(readDem(input));
+    const ComputeResult mesh = compute(dm.mesh, o.compute);
+    const std::vector<VertexProperty> props = outputProperties(mesh.features, mesh.filledShare);
+    const RasterImage a = readRaster(dir.file("one.tif")), b = readRaster(dir.file("windows.tif"));
+    ASSERT_EQ(a.bands.size(), o.bands.size());
+    ASSERT_EQ(b.bands.size(), o.bands.size());
+    const std::vector<float> share = toCells(dm, mesh.filledShare);
+    std::size_t compared = 0, differing = 0;
+    for (std::size_t k = 0; k + 1 < o.bands.size(); ++k) {  // all but height
+        const auto p = std::find_if(props.begin(), props.end(), [&](const VertexProperty& q) { return q.name == o.bands[k]; });
+        ASSERT_NE(p, props.end()) << o.bands[k];
+        const std::vector<float> cells = toCells(dm, p->values);
+        ASSERT_EQ(a.bands[k].name, o.bands[k]);
+        for (std::size_t c = 0; c < cells.size(); ++c) {
+            // A cell in no triangle (no filled share) is nodata in every band.
+            const float want = std::isnan(share[c]) ? std::numeric_limits<float>::quiet_NaN() : cells[c];
+            differing += !sameBits(a.bands[k].values[c], want) + !sameBits(b.bands[k].values[c], want);
+            compared += !std::isnan(want);
+        }
+    }
+    EXPECT_EQ(differing, 0u);
+    EXPECT_GT(compared, 5u * 8000u);
+    EXPECT_EQ(one.masked.total(), mesh.masked.total());
+}
+
+TEST(DemCompute, BandsThatCannotBeGivenAreRefusedFirst)
+{
+    const test::TempDir dir;
+    const std::string input = demFile(dir);
+    DemComputeOptions o = demOptions();
+    o.compute.invariants.select({Invariant::Volume});
+    o.bands = {"quality", "S_04"};  // S is not computed
+    try {
+        computeDem(input, dir.file("out.tif"), o);
+        FAIL() << "S_04 was accepted without S";
+    } catch (const InvalidInputError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("no feature 'S_04'"), std::string::npos) << what;
+        EXPECT_NE(what.find("V_01 ... V_04, quality"), std::string::npos) << what;
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir.file("out.tif")));
+    o.bands = {"quality"};
+    o.compute.tiling.tilesPerAxis = 2;
+    EXPECT_THROW(computeDem(input, dir.file("out.tif"), o), InvalidInputError);
+}
