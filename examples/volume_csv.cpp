@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iomanip>
 
 int main(int argc, char** argv)
 {
@@ -27,6 +28,7 @@ int main(int argc, char** argv)
             std::fprintf(stderr, "volume_csv: warning: %s\n", d.message.c_str());
 
         std::ofstream csv(argv[3]);
+        csv << std::setprecision(9);  // enough digits that each float reads back as itself
         csv << "vertex";
         for (double r : result.plan.radii) csv << ",V_r" << r;
         csv << '\n';

@@ -16,6 +16,7 @@ import msii
 
 MSII = os.environ["MSII_EXE"]
 SAMPLES = os.environ["MSII_SAMPLES_EXE"]
+VOLUME_CSV = os.environ.get("VOLUME_CSV_EXE")  # examples/volume_csv, the library's first program
 
 
 def read_ply(path):
@@ -68,6 +69,41 @@ def test_compute_equals_the_cli_bit_for_bit(tablet, tmp_path):
     assert compared > 100000
     assert np.isnan(r.V).any() and not np.isnan(r.V).all()  # open border: masked values
     assert r.voxel_size > 0 and len(r.levels) == 16
+
+
+def test_every_door_gives_the_same_values_on_a_scan_that_needs_repair(tablet, tmp_path):
+    # A scan as real ones come: duplicate faces, degenerate faces, a flipped face, small
+    # holes and a vertex in no face. `msii compute`, msii.compute and the C++ library's
+    # example (examples/volume_csv) all run the engine's pipeline (pipeline/compute.h), so
+    # they repair it alike and give the same V at every vertex.
+    assert VOLUME_CSV, "VOLUME_CSV_EXE is not set"
+    vertices, faces = msii.read_mesh(str(tablet))
+    rng = np.random.default_rng(7)
+    kept = np.ones(len(faces), bool)
+    for centre in rng.choice(len(vertices), 3, replace=False):  # small holes: faces near 3 vertices removed
+        near = np.linalg.norm(vertices - vertices[centre], axis=1) < 0.15
+        kept &= ~near[faces].any(axis=1)
+    broken = faces[kept].copy()
+    broken[5] = broken[5][::-1]                                       # flipped
+    broken = np.vstack([broken, broken[:4], [[broken[9][0], broken[9][0], broken[9][1]]]])  # duplicates, degenerate
+    broken_vertices = np.vstack([vertices, [[50.0, 50.0, 50.0]]])     # in no face
+    scan = tmp_path / "broken.ply"
+    msii.write_ply(str(scan), broken_vertices, broken)
+
+    python = msii.compute(broken_vertices, broken, 0.8, invariants="V")
+    kinds = {w.kind for w in python.warnings}
+    assert {"duplicate_faces_removed", "degenerate_faces_removed", "holes_filled"} <= kinds, kinds
+    out = tmp_path / "broken.msii.ply"
+    subprocess.run([MSII, "compute", str(scan), "-r", "0.8", "--invariants", "V", "-q", "-o", str(out)], check=True)
+    cli = np.stack([read_ply(out)["V_%02d" % (j + 1)] for j in range(16)], axis=1)
+    csv = tmp_path / "broken.csv"
+    subprocess.run([VOLUME_CSV, str(scan), "0.8", str(csv)], check=True, stderr=subprocess.DEVNULL)
+    library = np.genfromtxt(csv, delimiter=",", skip_header=1, dtype=np.float64)[:, 1:].astype(np.float32)
+    for name, values in [("msii.compute", python.V), ("volume_csv", library)]:
+        assert values.shape == cli.shape, name
+        assert np.array_equal(values, cli, equal_nan=True), name
+    assert np.count_nonzero(~np.isnan(cli)) > 5 * len(vertices)  # values compared, not only NaN
+    assert np.isnan(cli[-1]).all()  # the vertex in no face
 
 
 def test_array_types_and_layouts_give_the_same_values(tablet):

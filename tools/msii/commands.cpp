@@ -4,6 +4,7 @@
 #include <msii/core/errors.h>
 #include <msii/io/atomic_file.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 
@@ -24,6 +25,16 @@ void addPropertyNamesOption(CLI::App* cmd, std::string& prefix)
                     "cloudcompare (scalar_V_01 ... scalar_quality, which CloudCompare's command line "
                     "loads as scalar fields)")
         ->transform(CLI::CheckedTransformer(styles, CLI::ignore_case));
+}
+
+std::function<std::string(const std::string&)> numberCheck(std::function<bool(double)> allowed, std::string message)
+{
+    return [allowed = std::move(allowed), message = std::move(message)](const std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (end == text.c_str()) return {};  // not a number: CLI11 says so
+        return allowed(v) ? std::string() : message;
+    };
 }
 
 void checkOutputs(const std::vector<std::string>& paths, bool overwrite)

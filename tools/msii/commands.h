@@ -23,6 +23,10 @@ struct CommonArgs {
 /// Registers -j/--threads, -q/--quiet and --overwrite on @p cmd, into @p args.
 void addCommonOptions(CLI::App* cmd, CommonArgs& args);
 
+/// A check of a number option for CLI11's check(): "" where @p allowed(value) holds, else
+/// @p message (CLI11 itself refuses text that is not a number).
+std::function<std::string(const std::string&)> numberCheck(std::function<bool(double)> allowed, std::string message);
+
 /// Checks that each of @p paths may be written: it does not exist yet, or @p overwrite is
 /// set, and its folder is writable.
 /// @throw IOError naming the path (and --overwrite where it exists).

@@ -439,12 +439,8 @@ std::function<int()> addComputeCommand(CLI::App& app)
                     "kernels blur sharp edges over about a cell, so higher is more exact at sharp edges, "
                     "and slower)")
         // Given, it must be a precision: 0 (the engine's default) is not one.
-        ->check([](const std::string& text) -> std::string {
-            char* end = nullptr;
-            const double v = std::strtod(text.c_str(), &end);
-            if (end == text.c_str()) return {};  // not a number: CLI11 says so
-            return v >= 1 && v <= 64 ? std::string() : "the P and L precision must be between 1 and 64 cells per radius";
-        });
+        ->check(numberCheck([](double v) { return v >= 1 && v <= 64; },
+                            "the P and L precision must be between 1 and 64 cells per radius"));
     addCommonOptions(cmd, *args);
     addPropertyNamesOption(cmd, args->propertyPrefix);
     cmd->add_option("--units", args->units,
@@ -458,14 +454,11 @@ std::function<int()> addComputeCommand(CLI::App& app)
                     "Fill holes whose border is at most SIZE long (mesh units), for the computation only; "
                     "default pi*R (holes up to about R across); 0 fills none")
         ->type_name("SIZE")
-        ->check([](const std::string& text) -> std::string {
-            char* end = nullptr;
-            const double v = std::strtod(text.c_str(), &end);
-            if (end == text.c_str()) return {};  // not a number: CLI11 says so
-            return v >= 0 && std::isfinite(v) ? std::string() : "the hole size must be 0 (fill none) or a positive length";
-        });
+        ->check(numberCheck([](double v) { return v >= 0 && std::isfinite(v); },
+                            "the hole size must be 0 (fill none) or a positive length"));
     cmd->add_option("--invariants", args->invariants,
-                    "Which invariants, comma-separated (default V,S,P,L)");
+                    "Which invariants: letters of V, S, P and L, together or comma-separated (default V,S,P,L; "
+                    "VS and v,s are alike)");
     cmd->add_flag("--no-sphere", args->noSphere, "Leave out S (same as omitting it from --invariants)");
     cmd->add_flag("--exact", args->exact,
                   "Exact reference mode: from the triangles themselves, no voxels or samples "
