@@ -588,6 +588,14 @@ TEST(MsiiCli, TiledComputeWritesTheSameFeatures)
     }
     // Written tile by tile straight into the file, yet byte for byte the untiled file.
     EXPECT_TRUE(readFile(untiled.string()) == readFile(tiled.string()));
+    // The invariants spelled as Python spells them, or in lower case with spaces: the same file.
+    for (const char* spelled : {"VSPL", "'v, s, p, l'"}) {
+        const fs::path other = tempDir() / "spelled.msii.ply";
+        r = runMsii("compute '" + smallPatch() + "' -r 0.6 -n 4 -q --overwrite --invariants " + spelled + " --output '" +
+                    other.string() + "'");
+        ASSERT_EQ(r.code, 0) << spelled << ": " << r.err;
+        EXPECT_TRUE(readFile(untiled.string()) == readFile(other.string())) << spelled;
+    }
     EXPECT_NE(readFile((tempDir() / "tiled.msii.json").string()).find("\"tiles_per_axis\": 2"), std::string::npos);
     expectCleanFailure("'" + smallPatch() + "' -r 0.6 --memory-budget 10K", "too small for even one tile");
     expectCleanFailure("'" + smallPatch() + "' -r 0.6 --memory-budget lots", "is not a size");

@@ -89,13 +89,20 @@ void scatter(const ComputedPiece& piece, std::size_t numInputVertices, ComputeRe
     for (std::size_t k = 0; k < piece.vertices.size(); ++k) result.filledShare[piece.vertices[k]] = piece.filledShare[k];
 }
 
+/// The computation's plan, mesh statistics, cost and remarks into @p result.
+void takeSummary(const InvariantsResult& r, ComputeResult& result)
+{
+    result.plan = r.plan, result.stats = r.stats, result.check = r.check, result.cost = r.cost;
+    result.diagnostics.insert(result.diagnostics.end(), r.diagnostics.begin(), r.diagnostics.end());
+    result.features.radii = r.plan.radii;
+}
+
 /// Stages 2 to 4 in one piece: the prepared mesh's values, mapped to the input's vertices.
 void computeWhole(const PrepareMeshResult& prepared, const InvariantsOptions& options, const PieceSink* sink,
                   ComputeResult& result, RunContext* context)
 {
     InvariantsResult r = computeInvariants(prepared.mesh, options, context);
-    result.plan = r.plan, result.stats = r.stats, result.check = r.check, result.cost = r.cost;
-    result.diagnostics.insert(result.diagnostics.end(), r.diagnostics.begin(), r.diagnostics.end());
+    takeSummary(r, result);
     std::vector<std::uint32_t> inFace;  // the input vertices in a face
     for (std::uint32_t v = 0; v < prepared.preparedOf.size(); ++v)
         if (prepared.preparedOf[v] != PrepareMeshResult::kNoVertex) inFace.push_back(v);
@@ -113,7 +120,6 @@ void computeWhole(const PrepareMeshResult& prepared, const InvariantsOptions& op
         (*sink)(piece);
         return;
     }
-    result.features.radii = r.features.radii;
     for (Invariant i : r.features.invariants())
         for (std::vector<float>& column : r.features[i]) {
             result.features[i].push_back(toInputVertices(prepared, column));
@@ -142,11 +148,8 @@ void computeTiled(const PrepareMeshResult& prepared, const InvariantsOptions& op
         if (sink) (*sink)(piece);
         else scatter(piece, numInputVertices, result);
     };
-    InvariantsResult r = computeTiles(prepared.mesh, options, t, handOn, &result.tiling, context);
+    takeSummary(computeTiles(prepared.mesh, options, t, handOn, &result.tiling, context), result);
     result.tiled = true;
-    result.plan = r.plan, result.stats = r.stats, result.check = r.check, result.cost = r.cost;
-    result.diagnostics.insert(result.diagnostics.end(), r.diagnostics.begin(), r.diagnostics.end());
-    result.features.radii = r.plan.radii;
 }
 
 ComputeResult run(const TriMesh& input, const ComputeOptions& options, const PieceSink* sink, RunContext* context)
