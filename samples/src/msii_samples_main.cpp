@@ -74,29 +74,33 @@ int fail(int code, const std::string& message)
     return code;
 }
 
-} // namespace
-
-int main(int argc, char** argv)
-{
-    CLI::App app{"Writes deterministic, seedable sample meshes (irregular, scanner-like triangulations) "
-                 "as PLY. Units are mm. The same options give the same mesh on every machine. Open height "
-                 "fields (plane, terrain, tablet) in binary are streamed to the file, so their size is "
-                 "limited by the disk, not by memory."};
-    app.set_help_flag("-h,--help", "Print this help message and exit");
-
-    std::string shape, output, centerText;
+/// The command line: the values given, and the options themselves, which tell whether a
+/// value was given.
+struct Arguments {
+    std::string shape, output, centerText, offsetText, crs = "EPSG:25832";
     double spacing = 0, radius = 0, side = 0, width = 0, height = 0, thickness = 0, relief = 0, noise = 0;
-    double wedgeSize = 0, wedgeDensity = 0, holeSize = 0;
+    double wedgeSize = 0, wedgeDensity = 0, holeSize = 0, wallStep = 0, anisotropy = 1, densityVariation = 1;
+    double roughness = 0, hillWidth = 0;
     std::size_t holes = 0;
     std::uint64_t seed = 1;
     bool closed = false, cavity = false, ascii = false, doublePoints = false, quiet = false, list = false;
+    bool geotiff = false;
+    CLI::Option *optSpacing = nullptr, *optRadius = nullptr, *optCenter = nullptr, *optOffset = nullptr;
+    CLI::Option *optCavity = nullptr, *optSide = nullptr, *optWidth = nullptr, *optHeight = nullptr;
+    CLI::Option *optClosed = nullptr, *optThickness = nullptr, *optAnisotropy = nullptr, *optDensity = nullptr;
+    CLI::Option *optRoughness = nullptr, *optWallStep = nullptr, *optRelief = nullptr, *optHillWidth = nullptr;
+    CLI::Option *optNoise = nullptr, *optWedgeSize = nullptr, *optWedgeDensity = nullptr, *optHoleSize = nullptr;
+    CLI::Option *optGeotiff = nullptr, *optCrs = nullptr;
+};
 
+void addOptions(CLI::App& app, Arguments& a)
+{
     std::vector<std::string> shapeNames;
     for (const auto& s : kShapes) shapeNames.emplace_back(s.name);
-    app.add_option("shape", shape, "Shape to generate (see --list)")->check(CLI::IsMember(shapeNames));
-    app.add_flag("--list", list, "List the shapes with a one-line description and exit");
-    app.add_option("-o,--output", output, "Output PLY file");
-    auto* optSpacing = app.add_option("--spacing", spacing, "Mean vertex spacing, mm (~area / spacing^2 vertices)");
+    app.add_option("shape", a.shape, "Shape to generate (see --list)")->check(CLI::IsMember(shapeNames));
+    app.add_flag("--list", a.list, "List the shapes with a one-line description and exit");
+    app.add_option("-o,--output", a.output, "Output PLY file");
+    a.optSpacing = app.add_option("--spacing", a.spacing, "Mean vertex spacing, mm (~area / spacing^2 vertices)");
     // CLI11 would wrap "-3" around to 2^64 - 3; accept plain digits only.
     const CLI::Validator digitsOnly(
         [](std::string& text) {
@@ -106,51 +110,256 @@ int main(int argc, char** argv)
             return ok ? std::string() : "'" + text + "' is not an integer in 0 .. 2^64-1";
         },
         "", "UINT");
-    app.add_option("--seed", seed, "Random seed, 0 .. 2^64-1 (default 1)")->check(digitsOnly);
-    auto* optRadius = app.add_option("--radius", radius, "sphere/cavity: radius, mm (default 10)");
-    auto* optCenter = app.add_option("--center", centerText, "sphere/cavity: centre x,y,z, mm (default 0,0,0)");
-    std::string offsetText;
-    auto* optOffset = app.add_option("--offset", offsetText,
-                                     "Move the mesh by x,y,z: e.g. 500000,5500000,300 puts it in UTM-like "
-                                     "coordinates, as georeferenced scans come (written in double precision)");
-    auto* optCavity = app.add_flag("--cavity", cavity, "sphere: reverse the orientation (same as shape cavity)");
-    auto* optSide = app.add_option("--side", side, "cube: edge length, mm (default 10)");
-    auto* optWidth = app.add_option("--width", width, "plane/terrain/tablet: extent along x, mm (default 20)");
-    auto* optHeight = app.add_option("--height", height, "plane/terrain/tablet: extent along y, mm (default 15)");
-    auto* optClosed = app.add_flag("--closed", closed, "plane/terrain/tablet: closed slab instead of an open patch");
-    auto* optThickness = app.add_option("--thickness", thickness, "slab thickness below z = 0, mm (default 5)");
-    double wallStep = 0, anisotropy = 1, densityVariation = 1, roughness = 0;
-    auto* optAnisotropy = app.add_option("--anisotropy", anisotropy,
-                                         "plane/terrain/tablet: triangles this many times longer along x than y (default 1)");
-    auto* optDensity = app.add_option("--density-variation", densityVariation,
-                                      "plane/terrain/tablet: densest / sparsest vertex density, varying smoothly (default 1)");
-    auto* optRoughness = app.add_option("--roughness", roughness,
-                                        "plane/terrain/tablet: white scanner noise, z moved by up to this, mm (default 0)");
-    auto* optWallStep = app.add_option("--wall-step", wallStep,
-                                       "with --closed: walls and bottom of a few long triangles, bottom outline vertices "
-                                       "this far apart, mm (as many meshers make them; default: as fine as the top)");
-    auto* optRelief = app.add_option("--relief", relief, "terrain: hill amplitude, mm (default 1)");
-    double hillWidth = 0;
-    auto* optHillWidth = app.add_option("--hill-width", hillWidth, "terrain: typical hill width (Gaussian sigma), mm (default 2.5)");
-    auto* optNoise = app.add_option("--noise", noise, "terrain/tablet: smooth noise amplitude, mm (default 0.002)");
-    auto* optWedgeSize = app.add_option("--wedge-size", wedgeSize, "tablet: mean wedge length, mm (default 1.5)");
-    auto* optWedgeDensity = app.add_option("--wedge-density", wedgeDensity, "tablet: wedges per mm^2 (default 0.15)");
-    app.add_option("--holes", holes,
+    app.add_option("--seed", a.seed, "Random seed, 0 .. 2^64-1 (default 1)")->check(digitsOnly);
+    a.optRadius = app.add_option("--radius", a.radius, "sphere/cavity: radius, mm (default 10)");
+    a.optCenter = app.add_option("--center", a.centerText, "sphere/cavity: centre x,y,z, mm (default 0,0,0)");
+    a.optOffset = app.add_option("--offset", a.offsetText,
+                                 "Move the mesh by x,y,z: e.g. 500000,5500000,300 puts it in UTM-like "
+                                 "coordinates, as georeferenced scans come (written in double precision)");
+    a.optCavity = app.add_flag("--cavity", a.cavity, "sphere: reverse the orientation (same as shape cavity)");
+    a.optSide = app.add_option("--side", a.side, "cube: edge length, mm (default 10)");
+    a.optWidth = app.add_option("--width", a.width, "plane/terrain/tablet: extent along x, mm (default 20)");
+    a.optHeight = app.add_option("--height", a.height, "plane/terrain/tablet: extent along y, mm (default 15)");
+    a.optClosed = app.add_flag("--closed", a.closed, "plane/terrain/tablet: closed slab instead of an open patch");
+    a.optThickness = app.add_option("--thickness", a.thickness, "slab thickness below z = 0, mm (default 5)");
+    a.optAnisotropy = app.add_option("--anisotropy", a.anisotropy,
+                                     "plane/terrain/tablet: triangles this many times longer along x than y (default 1)");
+    a.optDensity = app.add_option("--density-variation", a.densityVariation,
+                                  "plane/terrain/tablet: densest / sparsest vertex density, varying smoothly (default 1)");
+    a.optRoughness = app.add_option("--roughness", a.roughness,
+                                    "plane/terrain/tablet: white scanner noise, z moved by up to this, mm (default 0)");
+    a.optWallStep = app.add_option("--wall-step", a.wallStep,
+                                   "with --closed: walls and bottom of a few long triangles, bottom outline vertices "
+                                   "this far apart, mm (as many meshers make them; default: as fine as the top)");
+    a.optRelief = app.add_option("--relief", a.relief, "terrain: hill amplitude, mm (default 1)");
+    a.optHillWidth = app.add_option("--hill-width", a.hillWidth,
+                                    "terrain: typical hill width (Gaussian sigma), mm (default 2.5)");
+    a.optNoise = app.add_option("--noise", a.noise, "terrain/tablet: smooth noise amplitude, mm (default 0.002)");
+    a.optWedgeSize = app.add_option("--wedge-size", a.wedgeSize, "tablet: mean wedge length, mm (default 1.5)");
+    a.optWedgeDensity = app.add_option("--wedge-density", a.wedgeDensity, "tablet: wedges per mm^2 (default 0.15)");
+    app.add_option("--holes", a.holes,
                    "Scanner-like holes: remove the faces around this many seeded spots (vertices are kept)");
-    auto* optHoleSize = app.add_option("--hole-size", holeSize,
-                                       "With --holes: largest hole radius, mm (default 2 spacings; the smallest is a "
-                                       "quarter of it)");
-    bool geotiff = false;
-    std::string crs = "EPSG:25832";
-    auto* optGeotiff = app.add_flag(
-        "--geotiff", geotiff,
+    a.optHoleSize = app.add_option("--hole-size", a.holeSize,
+                                   "With --holes: largest hole radius, mm (default 2 spacings; the smallest is a "
+                                   "quarter of it)");
+    a.optGeotiff = app.add_flag(
+        "--geotiff", a.geotiff,
         "plane/terrain/tablet: write a DEM instead of a mesh: a GeoTIFF of heights on a regular grid of "
         "--spacing cells, in metres, its corner at --offset x,y (default 512000,5498000, UTM-like) lifted by z "
         "(default 300), in --crs; --holes makes nodata patches up to --hole-size in radius");
-    auto* optCrs = app.add_option("--crs", crs, "With --geotiff: the coordinate system (default EPSG:25832, ETRS89 / UTM 32N)");
-    app.add_flag("--ascii", ascii, "Write ascii PLY (default binary little endian)");
-    app.add_flag("--double", doublePoints, "Write coordinates as double (exact) instead of float");
-    app.add_flag("-q,--quiet", quiet, "Do not print the summary line");
+    a.optCrs = app.add_option("--crs", a.crs, "With --geotiff: the coordinate system (default EPSG:25832, ETRS89 / UTM 32N)");
+    app.add_flag("--ascii", a.ascii, "Write ascii PLY (default binary little endian)");
+    app.add_flag("--double", a.doublePoints, "Write coordinates as double (exact) instead of float");
+    app.add_flag("-q,--quiet", a.quiet, "Do not print the summary line");
+}
+
+/// @throw UsageError without a shape or an output, for options that do not apply to the
+/// shape (rejected rather than silently ignored), and for options that need another.
+void checkUsage(const Arguments& a)
+{
+    if (a.shape.empty()) throw UsageError("a SHAPE is required (one of sphere, cavity, cube, plane, terrain, tablet; see --list)");
+    if (a.output.empty()) throw UsageError("--output FILE.ply is required");
+    const std::map<const CLI::Option*, std::set<std::string>> applies = {
+        {a.optRadius, {"sphere", "cavity"}},
+        {a.optCenter, {"sphere", "cavity"}},
+        {a.optCavity, {"sphere", "cavity"}},
+        {a.optSide, {"cube"}},
+        {a.optWidth, {"plane", "terrain", "tablet"}},
+        {a.optHeight, {"plane", "terrain", "tablet"}},
+        {a.optClosed, {"plane", "terrain", "tablet"}},
+        {a.optThickness, {"plane", "terrain", "tablet"}},
+        {a.optWallStep, {"plane", "terrain", "tablet"}},
+        {a.optAnisotropy, {"plane", "terrain", "tablet"}},
+        {a.optDensity, {"plane", "terrain", "tablet"}},
+        {a.optRoughness, {"plane", "terrain", "tablet"}},
+        {a.optRelief, {"terrain"}},
+        {a.optHillWidth, {"terrain"}},
+        {a.optNoise, {"terrain", "tablet"}},
+        {a.optWedgeSize, {"tablet"}},
+        {a.optWedgeDensity, {"tablet"}},
+        {a.optGeotiff, {"plane", "terrain", "tablet"}},
+    };
+    for (const auto& [opt, shapes] : applies)
+        if (opt->count() > 0 && shapes.count(a.shape) == 0)
+            throw UsageError("option " + opt->get_name() + " does not apply to shape " + a.shape);
+    if (a.optThickness->count() > 0 && !a.closed) throw UsageError("--thickness needs --closed");
+    if (a.optWallStep->count() > 0 && !a.closed) throw UsageError("--wall-step needs --closed");
+    if (a.optCrs->count() > 0 && !a.geotiff) throw UsageError("--crs needs --geotiff");
+    if (a.geotiff && (a.closed || a.ascii || a.doublePoints || a.anisotropy != 1 || a.densityVariation != 1 ||
+                      a.roughness > 0))
+        throw UsageError("--geotiff writes a regular grid: not with --closed, --ascii, --double, --anisotropy, "
+                         "--density-variation or --roughness");
+    if (a.optHoleSize->count() > 0 && a.holes == 0) throw UsageError("--hole-size needs --holes");
+}
+
+msii::TriMesh sphereMesh(const Arguments& a, std::ostringstream& comment)
+{
+    msii::samples::SphereOptions o;
+    if (a.optSpacing->count()) o.spacing = a.spacing;
+    if (a.optRadius->count()) o.radius = a.radius;
+    if (a.optCenter->count()) o.center = parseTriple(a.centerText, "--center");
+    o.cavity = a.cavity || a.shape == "cavity";
+    o.seed = a.seed;
+    comment << " radius " << o.radius << " spacing " << o.spacing << (o.cavity ? " cavity" : "");
+    return msii::samples::makeSphere(o);
+}
+
+msii::TriMesh cubeMesh(const Arguments& a, std::ostringstream& comment)
+{
+    msii::samples::CubeOptions o;
+    if (a.optSpacing->count()) o.spacing = a.spacing;
+    if (a.optSide->count()) o.side = a.side;
+    o.seed = a.seed;
+    comment << " side " << o.side << " spacing " << o.spacing;
+    return msii::samples::makeCube(o);
+}
+
+/// The options of a plane, terrain or tablet, said in @p comment.
+msii::samples::HeightFieldOptions heightFieldOptions(const Arguments& a, std::ostringstream& comment)
+{
+    msii::samples::HeightFieldOptions o;
+    o.kind = a.shape == "plane"     ? msii::samples::HeightFieldKind::Plane
+             : a.shape == "terrain" ? msii::samples::HeightFieldKind::Terrain
+                                    : msii::samples::HeightFieldKind::Tablet;
+    if (a.optSpacing->count()) o.spacing = a.spacing;
+    if (a.optWidth->count()) o.width = a.width;
+    if (a.optHeight->count()) o.height = a.height;
+    if (a.optThickness->count()) o.thickness = a.thickness;
+    o.wallStep = a.wallStep;
+    o.anisotropy = a.anisotropy;
+    o.densityVariation = a.densityVariation;
+    o.roughness = a.roughness;
+    if (a.optRelief->count()) o.relief = a.relief;
+    if (a.optHillWidth->count()) o.hillWidth = a.hillWidth;
+    if (a.optNoise->count()) o.noise = a.noise;
+    if (a.optWedgeSize->count()) o.wedgeSize = a.wedgeSize;
+    if (a.optWedgeDensity->count()) o.wedgeDensity = a.wedgeDensity;
+    o.closed = a.closed;
+    o.seed = a.seed;
+    comment << " width " << o.width << " height " << o.height << " spacing " << o.spacing;
+    if (o.closed) comment << " closed thickness " << o.thickness;
+    if (o.wallStep > 0) comment << " wall step " << o.wallStep;
+    if (o.anisotropy != 1) comment << " anisotropy " << o.anisotropy;
+    if (o.densityVariation != 1) comment << " density variation " << o.densityVariation;
+    if (o.roughness > 0) comment << " roughness " << o.roughness;
+    return o;
+}
+
+/// --geotiff: the height field as a DEM of heights on a regular grid. Returns the exit code.
+int writeDem(const msii::samples::HeightFieldOptions& o, const Arguments& a, const std::string& comment)
+{
+    msii::samples::DemSampleOptions d;
+    d.surface = o;
+    d.crs = a.crs;
+    if (a.optOffset->count()) {
+        const msii::Vec3 at = parseTriple(a.offsetText, "--offset");
+        d.west = at.x, d.north = at.y, d.baseHeight = at.z;
+    }
+    d.nodataPatches = a.holes;
+    d.patchRadius = a.optHoleSize->count() ? a.holeSize : 0;
+    const msii::Dem dem = msii::samples::makeDem(d);
+    msii::RasterOutputOptions ro;
+    ro.nodata = -9999.0;  // as DEMs often have it
+    ro.description = comment + " geotiff";
+    try {
+        msii::writeRaster(a.output, dem.georeference, {{"height", dem.heights}}, ro);
+    } catch (const msii::IOError& e) {
+        return fail(1, e.what());
+    }
+    if (!a.quiet)
+        std::cout << a.output << ": " << dem.georeference.width << " x " << dem.georeference.height << " cells, "
+                  << dem.heights.size() - dem.numValid << " nodata\n";
+    return 0;
+}
+
+/// An open height field in binary PLY, streamed: never held in memory, so any size the
+/// disk takes. Returns the exit code.
+int writeStreamed(const msii::samples::HeightFieldOptions& o, const Arguments& a, const std::string& comment)
+{
+    msii::WritePlyOptions plyOptions;
+    plyOptions.forceDoublePoints = a.doublePoints;
+    plyOptions.comments.push_back(comment);
+    msii::samples::StreamedMeshCounts counts;
+    try {
+        counts = msii::samples::writeHeightFieldPly(o, a.output, plyOptions);
+    } catch (const msii::IOError& e) {
+        return fail(1, e.what());
+    }
+    if (!a.quiet) std::cout << a.output << ": " << counts.vertices << " vertices, " << counts.triangles << " triangles\n";
+    return 0;
+}
+
+/// --holes: scanner-like holes punched into @p mesh, said in @p comment.
+void addHoles(msii::TriMesh& mesh, const Arguments& a, std::ostringstream& comment)
+{
+    msii::samples::HoleOptions ho;
+    ho.count = a.holes;
+    const double step = a.optSpacing->count()                          ? a.spacing
+                        : a.shape == "sphere" || a.shape == "cavity" ? msii::samples::SphereOptions{}.spacing
+                        : a.shape == "cube"                          ? msii::samples::CubeOptions{}.spacing
+                                                                     : msii::samples::HeightFieldOptions{}.spacing;
+    ho.maxSize = a.optHoleSize->count() ? a.holeSize : 2.0 * step;
+    ho.minSize = 0.25 * ho.maxSize;
+    ho.seed = a.seed;
+    const msii::samples::HoleReport made = msii::samples::punchHoles(mesh, ho);
+    comment << " holes " << made.holes << " up to " << ho.maxSize;
+}
+
+/// Writes @p mesh as PLY. Returns the exit code.
+int writeMesh(const msii::TriMesh& mesh, const Arguments& a, const std::string& comment)
+{
+    msii::WritePlyOptions plyOptions;
+    plyOptions.binary = !a.ascii;
+    plyOptions.forceDoublePoints = a.doublePoints;
+    plyOptions.comments.push_back(comment);
+    try {
+        msii::writePly(a.output, mesh, {}, plyOptions);
+    } catch (const msii::Error& e) {
+        return fail(1, e.what());  // I/O, not usage
+    }
+    if (!a.quiet)
+        std::cout << a.output << ": " << mesh.numVertices() << " vertices, " << mesh.numTriangles() << " triangles\n";
+    return 0;
+}
+
+/// Generates and writes the shape. Returns the exit code.
+/// @throw UsageError, msii::InvalidInputError for invalid options.
+int generate(const Arguments& a)
+{
+    checkUsage(a);
+    msii::TriMesh mesh;
+    std::ostringstream comment;
+    comment << "msii-samples " << a.shape << " seed " << a.seed;
+    if (a.shape == "sphere" || a.shape == "cavity") {
+        mesh = sphereMesh(a, comment);
+    } else if (a.shape == "cube") {
+        mesh = cubeMesh(a, comment);
+    } else {
+        const msii::samples::HeightFieldOptions o = heightFieldOptions(a, comment);
+        if (a.geotiff) return writeDem(o, a, comment.str());
+        if (!o.closed && !a.ascii && a.holes == 0 && a.optOffset->count() == 0) return writeStreamed(o, a, comment.str());
+        mesh = msii::samples::makeHeightField(o);
+    }
+    if (a.holes > 0) addHoles(mesh, a, comment);
+    if (a.optOffset->count()) {
+        const msii::Vec3 offset = parseTriple(a.offsetText, "--offset");
+        for (msii::Vec3& p : mesh.points) p += offset;
+        comment << " offset " << a.offsetText;
+    }
+    return writeMesh(mesh, a, comment.str());
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    CLI::App app{"Writes deterministic, seedable sample meshes (irregular, scanner-like triangulations) "
+                 "as PLY. Units are mm. The same options give the same mesh on every machine. Open height "
+                 "fields (plane, terrain, tablet) in binary are streamed to the file, so their size is "
+                 "limited by the disk, not by memory."};
+    app.set_help_flag("-h,--help", "Print this help message and exit");
+    Arguments a;
+    addOptions(app, a);
 
     try {
         app.parse(argc, argv);
@@ -160,163 +369,13 @@ int main(int argc, char** argv)
         return fail(2, e.what());
     }
 
-    if (list) {
+    if (a.list) {
         for (const auto& s : kShapes) std::cout << s.name << std::string(10 - std::string(s.name).size(), ' ') << s.description << '\n';
         return 0;
     }
 
     try {
-        if (shape.empty()) throw UsageError("a SHAPE is required (one of sphere, cavity, cube, plane, terrain, tablet; see --list)");
-        if (output.empty()) throw UsageError("--output FILE.ply is required");
-
-        // Options that do not apply to the shape are rejected rather than silently ignored.
-        const std::map<const CLI::Option*, std::set<std::string>> applies = {
-            {optRadius, {"sphere", "cavity"}},
-            {optCenter, {"sphere", "cavity"}},
-            {optCavity, {"sphere", "cavity"}},
-            {optSide, {"cube"}},
-            {optWidth, {"plane", "terrain", "tablet"}},
-            {optHeight, {"plane", "terrain", "tablet"}},
-            {optClosed, {"plane", "terrain", "tablet"}},
-            {optThickness, {"plane", "terrain", "tablet"}},
-            {optWallStep, {"plane", "terrain", "tablet"}},
-            {optAnisotropy, {"plane", "terrain", "tablet"}},
-            {optDensity, {"plane", "terrain", "tablet"}},
-            {optRoughness, {"plane", "terrain", "tablet"}},
-            {optRelief, {"terrain"}},
-            {optHillWidth, {"terrain"}},
-            {optNoise, {"terrain", "tablet"}},
-            {optWedgeSize, {"tablet"}},
-            {optWedgeDensity, {"tablet"}},
-            {optGeotiff, {"plane", "terrain", "tablet"}},
-        };
-        for (const auto& [opt, shapes] : applies)
-            if (opt->count() > 0 && shapes.count(shape) == 0)
-                throw UsageError("option " + opt->get_name() + " does not apply to shape " + shape);
-        if (optThickness->count() > 0 && !closed) throw UsageError("--thickness needs --closed");
-        if (optWallStep->count() > 0 && !closed) throw UsageError("--wall-step needs --closed");
-        if (optCrs->count() > 0 && !geotiff) throw UsageError("--crs needs --geotiff");
-        if (geotiff && (closed || ascii || doublePoints || anisotropy != 1 || densityVariation != 1 || roughness > 0))
-            throw UsageError("--geotiff writes a regular grid: not with --closed, --ascii, --double, --anisotropy, "
-                             "--density-variation or --roughness");
-        if (optHoleSize->count() > 0 && holes == 0) throw UsageError("--hole-size needs --holes");
-
-        msii::TriMesh mesh;
-        std::ostringstream comment;
-        comment << "msii-samples " << shape << " seed " << seed;
-        if (shape == "sphere" || shape == "cavity") {
-            msii::samples::SphereOptions o;
-            if (optSpacing->count()) o.spacing = spacing;
-            if (optRadius->count()) o.radius = radius;
-            if (optCenter->count()) o.center = parseTriple(centerText, "--center");
-            o.cavity = cavity || shape == "cavity";
-            o.seed = seed;
-            comment << " radius " << o.radius << " spacing " << o.spacing << (o.cavity ? " cavity" : "");
-            mesh = msii::samples::makeSphere(o);
-        } else if (shape == "cube") {
-            msii::samples::CubeOptions o;
-            if (optSpacing->count()) o.spacing = spacing;
-            if (optSide->count()) o.side = side;
-            o.seed = seed;
-            comment << " side " << o.side << " spacing " << o.spacing;
-            mesh = msii::samples::makeCube(o);
-        } else {
-            msii::samples::HeightFieldOptions o;
-            o.kind = shape == "plane" ? msii::samples::HeightFieldKind::Plane
-                     : shape == "terrain" ? msii::samples::HeightFieldKind::Terrain
-                                          : msii::samples::HeightFieldKind::Tablet;
-            if (optSpacing->count()) o.spacing = spacing;
-            if (optWidth->count()) o.width = width;
-            if (optHeight->count()) o.height = height;
-            if (optThickness->count()) o.thickness = thickness;
-            o.wallStep = wallStep;
-            o.anisotropy = anisotropy;
-            o.densityVariation = densityVariation;
-            o.roughness = roughness;
-            if (optRelief->count()) o.relief = relief;
-            if (optHillWidth->count()) o.hillWidth = hillWidth;
-            if (optNoise->count()) o.noise = noise;
-            if (optWedgeSize->count()) o.wedgeSize = wedgeSize;
-            if (optWedgeDensity->count()) o.wedgeDensity = wedgeDensity;
-            o.closed = closed;
-            o.seed = seed;
-            comment << " width " << o.width << " height " << o.height << " spacing " << o.spacing;
-            if (o.closed) comment << " closed thickness " << o.thickness;
-            if (o.wallStep > 0) comment << " wall step " << o.wallStep;
-            if (o.anisotropy != 1) comment << " anisotropy " << o.anisotropy;
-            if (o.densityVariation != 1) comment << " density variation " << o.densityVariation;
-            if (o.roughness > 0) comment << " roughness " << o.roughness;
-            if (geotiff) {
-                msii::samples::DemSampleOptions d;
-                d.surface = o;
-                d.crs = crs;
-                if (optOffset->count()) {
-                    const msii::Vec3 at = parseTriple(offsetText, "--offset");
-                    d.west = at.x, d.north = at.y, d.baseHeight = at.z;
-                }
-                d.nodataPatches = holes;
-                d.patchRadius = optHoleSize->count() ? holeSize : 0;
-                const msii::Dem dem = msii::samples::makeDem(d);
-                msii::RasterOutputOptions ro;
-                ro.nodata = -9999.0;  // as DEMs often have it
-                ro.description = comment.str() + " geotiff";
-                try {
-                    msii::writeRaster(output, dem.georeference, {{"height", dem.heights}}, ro);
-                } catch (const msii::IOError& e) {
-                    return fail(1, e.what());
-                }
-                if (!quiet)
-                    std::cout << output << ": " << dem.georeference.width << " x " << dem.georeference.height
-                              << " cells, " << dem.heights.size() - dem.numValid << " nodata\n";
-                return 0;
-            }
-            if (!o.closed && !ascii && holes == 0 && optOffset->count() == 0) {
-                // Streamed: never held in memory, so any size the disk takes.
-                msii::WritePlyOptions plyOptions;
-                plyOptions.forceDoublePoints = doublePoints;
-                plyOptions.comments.push_back(comment.str());
-                msii::samples::StreamedMeshCounts counts;
-                try {
-                    counts = msii::samples::writeHeightFieldPly(o, output, plyOptions);
-                } catch (const msii::IOError& e) {
-                    return fail(1, e.what());
-                }
-                if (!quiet) std::cout << output << ": " << counts.vertices << " vertices, " << counts.triangles << " triangles\n";
-                return 0;
-            }
-            mesh = msii::samples::makeHeightField(o);
-        }
-
-        if (holes > 0) {
-            msii::samples::HoleOptions ho;
-            ho.count = holes;
-            const double step = optSpacing->count()                       ? spacing
-                                : shape == "sphere" || shape == "cavity" ? msii::samples::SphereOptions{}.spacing
-                                : shape == "cube"                        ? msii::samples::CubeOptions{}.spacing
-                                                                         : msii::samples::HeightFieldOptions{}.spacing;
-            ho.maxSize = optHoleSize->count() ? holeSize : 2.0 * step;
-            ho.minSize = 0.25 * ho.maxSize;
-            ho.seed = seed;
-            const msii::samples::HoleReport made = msii::samples::punchHoles(mesh, ho);
-            comment << " holes " << made.holes << " up to " << ho.maxSize;
-        }
-        if (optOffset->count()) {
-            const msii::Vec3 offset = parseTriple(offsetText, "--offset");
-            for (msii::Vec3& p : mesh.points) p += offset;
-            comment << " offset " << offsetText;
-        }
-        msii::WritePlyOptions plyOptions;
-        plyOptions.binary = !ascii;
-        plyOptions.forceDoublePoints = doublePoints;
-        plyOptions.comments.push_back(comment.str());
-        try {
-            msii::writePly(output, mesh, {}, plyOptions);
-        } catch (const msii::Error& e) {
-            return fail(1, e.what());  // I/O, not usage
-        }
-        if (!quiet)
-            std::cout << output << ": " << mesh.numVertices() << " vertices, " << mesh.numTriangles() << " triangles\n";
-        return 0;
+        return generate(a);
     } catch (const UsageError& e) {
         return fail(2, e.what());
     } catch (const msii::InvalidInputError& e) {

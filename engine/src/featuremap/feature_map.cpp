@@ -85,21 +85,10 @@ Imf::Compression toImf(ExrCompression c)
 Imath::V3d v3(const Vec3& v) { return Imath::V3d(v.x, v.y, v.z); }
 Vec3 vec(const Imath::V3d& v) { return Vec3(v.x, v.y, v.z); }
 
-} // namespace
-
-ExrCompression parseExrCompression(const std::string& name)
-{
-    if (name == "none") return ExrCompression::None;
-    if (name == "rle") return ExrCompression::Rle;
-    if (name == "zips") return ExrCompression::Zips;
-    if (name == "zip") return ExrCompression::Zip;
-    if (name == "piz") return ExrCompression::Piz;
-    throw InvalidInputError("unknown EXR compression '" + name + "' (use zip, zips, piz, rle or none; all lossless)");
-}
-
-FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, const MapFrame& frame,
-                               const std::vector<VertexProperty>& properties,
-                               const FeatureMapOptions& options, RunContext* progress)
+/// @throw InvalidInputError for a property without one value per vertex, with an empty,
+/// reserved or repeated name, or a zip level outside 1 to 9.
+void validateMapInputs(const TriMesh& mesh, const std::vector<VertexProperty>& properties,
+                       const FeatureMapOptions& options)
 {
     static const std::set<std::string> reserved{"height", "normal.x", "normal.y", "normal.z", "mask"};
     std::set<std::string> seen;
@@ -110,36 +99,33 @@ FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, con
             throw InvalidInputError("property name '" + p.name + "' is empty, reserved or repeated");
     }
     if (options.zipLevel < 1 || options.zipLevel > 9) throw InvalidInputError("the zip level must be 1 to 9");
+}
 
-    FeatureMapInfo info;
-    Stopwatch stage;
-    const PixelHits hits = rasterize(mesh, frame, progress);
-    info.coveredPixels = hits.covered;
-    // Per-vertex values, vertex-major (normal x/y/z in the map frame, then the properties), so
-    // that a pixel reads three contiguous rows.
+/// Per-vertex values, vertex-major (normal x/y/z in the map frame, then the properties), so
+/// that a pixel reads three contiguous rows.
+std::vector<float> vertexTable(const TriMesh& mesh, const MapFrame& frame, const std::vector<VertexProperty>& properties)
+{
     const std::size_t nv = mesh.numVertices(), numValues = 3 + properties.size();
     std::vector<float> table(nv * numValues);
-    {
-        const std::array<std::vector<float>, 3> n = vertexNormalsInFrame(mesh, frame);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
-            for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                float* row = table.data() + i * numValues;
-                for (int c = 0; c < 3; ++c) row[c] = n[std::size_t(c)][i];
-                for (std::size_t q = 0; q < properties.size(); ++q) row[3 + q] = properties[q].values[i];
-            }
-        });
-    }
-    info.rasterSeconds = stage.seconds();
-    stage.restart();
+    const std::array<std::vector<float>, 3> n = vertexNormalsInFrame(mesh, frame);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            float* row = table.data() + i * numValues;
+            for (int c = 0; c < 3; ++c) row[c] = n[std::size_t(c)][i];
+            for (std::size_t q = 0; q < properties.size(); ++q) row[3 + q] = properties[q].values[i];
+        }
+    });
+    return table;
+}
 
-    const int width = frame.width, height = frame.height;
+/// The header of the map: its channels (@p names), the frame that places a pixel in space,
+/// and where the values came from.
+Imf::Header mapHeader(const MapFrame& frame, const FeatureMapOptions& options, const std::vector<std::string>& names)
+{
     const Imf::PixelType type = options.half ? Imf::HALF : Imf::FLOAT;
-    Imf::Header header(width, height);
+    Imf::Header header(frame.width, frame.height);
     header.compression() = toImf(options.compression);
     header.zipCompressionLevel() = options.zipLevel;
-    // Channel order in the band buffer: height, normal.x/y/z, mask, then the properties.
-    std::vector<std::string> names{"height", "normal.x", "normal.y", "normal.z", "mask"};
-    for (const VertexProperty& p : properties) names.push_back(p.name);
     for (const std::string& name : names) header.channels().insert(name, Imf::Channel(type));
     header.insert("msii:pixelSize", Imf::DoubleAttribute(frame.pixelSize));
     header.insert("msii:origin", Imf::V3dAttribute(v3(frame.origin)));
@@ -157,12 +143,139 @@ FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, con
     Imf::addComments(header, "msii feature map: pixel (x, y) centre at u = minU + (x + 0.5) pixelSize, "
                              "v = maxV - (y + 0.5) pixelSize; point = origin + u axisU + v axisV + "
                              "height normal; NaN = background (see mask)");
+    return header;
+}
 
+/// A band of kRowsPerChunk rows of the map, one plane per channel in the order height,
+/// normal.x/y/z, mask, then the properties, filled from the pixel hits and the vertex table.
+class MapBand {
+public:
+    /// @p width: of the map; @p numValues: per vertex in @p table.
+    MapBand(const TriMesh& mesh, const PixelHits& hits, const std::vector<float>& table, std::size_t numValues,
+            int width, std::size_t numChannels, bool half)
+        : mMesh(mesh), mHits(hits), mTable(table), mNumValues(numValues), mNumChannels(numChannels),
+          mWidth(width), mChunkPixels(std::size_t(width) * kRowsPerChunk), mHalf(half),
+          mBand(numChannels * mChunkPixels)
+    {
+        if (half) mBandHalf.resize(numChannels * mChunkPixels);
+    }
+
+    /// Rows @p r of the band that starts at row @p y0 of the map.
+    void fillRows(int y0, const tbb::blocked_range<int>& r)
+    {
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        const std::size_t numValues = mNumValues, chunkPixels = mChunkPixels;
+        const int width = mWidth;
+        // Per row, blocks of kBlockPixels: the values of a block's pixels are interpolated
+        // pixel by pixel from the rows of the vertex table (contiguous), then stored
+        // channel by channel (contiguous): a pixel's 70 values are not scattered over 70
+        // planes one at a time.
+        std::vector<float> value(std::size_t(kBlockPixels) * numValues);
+        std::array<bool, kBlockPixels> hit{};
+        for (int y = r.begin(); y < r.end(); ++y)
+            for (int x0 = 0; x0 < width; x0 += kBlockPixels) {
+                const int count = std::min(kBlockPixels, width - x0);
+                const std::size_t k0 = mHits.index(x0, y0 + y);
+                const std::size_t at = std::size_t(y) * std::size_t(width) + std::size_t(x0);
+                for (int x = 0; x < count; ++x) {
+                    const std::size_t k = k0 + std::size_t(x);
+                    const std::uint32_t t = mHits.triangle[k];
+                    mBand[at + std::size_t(x)] = mHits.depth[k];
+                    mBand[4 * chunkPixels + at + std::size_t(x)] = t != PixelHits::kNone ? 1.0f : 0.0f;
+                    hit[std::size_t(x)] = t != PixelHits::kNone;
+                    if (t == PixelHits::kNone) continue;
+                    // Linear interpolation over the triangle (barycentric weights).
+                    const Triangle& tri = mMesh.triangles[t];
+                    const float w1 = mHits.b1[k], w2 = mHits.b2[k], w0 = 1.0f - w1 - w2;
+                    const float* r0 = mTable.data() + std::size_t(tri[0]) * numValues;
+                    const float* r1 = mTable.data() + std::size_t(tri[1]) * numValues;
+                    const float* r2 = mTable.data() + std::size_t(tri[2]) * numValues;
+                    float* v = value.data() + std::size_t(x) * numValues;
+                    for (std::size_t q = 0; q < numValues; ++q) v[q] = w0 * r0[q] + w1 * r1[q] + w2 * r2[q];
+                    const float len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+                    for (int c = 0; c < 3; ++c) v[c] = len > 0 ? v[c] / len : nan;
+                }
+                // Channel c of the band holds value q = c − 2 (c >= 5) or c − 1 (normals).
+                for (std::size_t q = 0; q < numValues; ++q) {
+                    float* out = mBand.data() + (q < 3 ? 1 + q : 2 + q) * chunkPixels + at;
+                    const float* v = value.data() + q;
+                    for (int x = 0; x < count; ++x) out[x] = hit[std::size_t(x)] ? v[std::size_t(x) * numValues] : nan;
+                }
+            }
+        // --half: the rows just filled, while they are in the cache.
+        if (mHalf)
+            for (std::size_t c = 0; c < mNumChannels; ++c) {
+                const std::size_t from = c * chunkPixels + std::size_t(r.begin()) * std::size_t(width);
+                floatsToHalf(mBand.data() + from, mBandHalf.data() + from, std::size_t(r.size()) * std::size_t(width));
+            }
+    }
+
+    /// The band as OpenEXR's slices of the channels @p names, for the rows from @p y0.
+    Imf::FrameBuffer frameBuffer(const std::vector<std::string>& names, int y0)
+    {
+        const int width = mWidth;
+        Imf::FrameBuffer fb;
+        for (std::size_t c = 0; c < mNumChannels; ++c) {
+            // Slices address pixel (x, y) as base + x·xStride + y·yStride: shift by y0 rows.
+            if (mHalf) {
+                half* h = reinterpret_cast<half*>(mBandHalf.data() + c * mChunkPixels);
+                char* base = reinterpret_cast<char*>(h) - std::ptrdiff_t(y0) * width * std::ptrdiff_t(sizeof(half));
+                fb.insert(names[c], Imf::Slice(Imf::HALF, base, sizeof(half), sizeof(half) * std::size_t(width)));
+            } else {
+                char* base = reinterpret_cast<char*>(mBand.data() + c * mChunkPixels) -
+                             std::ptrdiff_t(y0) * width * std::ptrdiff_t(sizeof(float));
+                fb.insert(names[c], Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * std::size_t(width)));
+            }
+        }
+        return fb;
+    }
+
+private:
+    const TriMesh& mMesh;
+    const PixelHits& mHits;
+    const std::vector<float>& mTable;
+    const std::size_t mNumValues, mNumChannels;
+    const int mWidth;
+    const std::size_t mChunkPixels;
+    const bool mHalf;
+    std::vector<float> mBand;
+    std::vector<std::uint16_t> mBandHalf;  // half bits when mHalf
+};
+
+} // namespace
+
+ExrCompression parseExrCompression(const std::string& name)
+{
+    if (name == "none") return ExrCompression::None;
+    if (name == "rle") return ExrCompression::Rle;
+    if (name == "zips") return ExrCompression::Zips;
+    if (name == "zip") return ExrCompression::Zip;
+    if (name == "piz") return ExrCompression::Piz;
+    throw InvalidInputError("unknown EXR compression '" + name + "' (use zip, zips, piz, rle or none; all lossless)");
+}
+
+FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, const MapFrame& frame,
+                               const std::vector<VertexProperty>& properties,
+                               const FeatureMapOptions& options, RunContext* progress)
+{
+    validateMapInputs(mesh, properties, options);
+
+    FeatureMapInfo info;
+    Stopwatch stage;
+    const PixelHits hits = rasterize(mesh, frame, progress);
+    info.coveredPixels = hits.covered;
+    const std::size_t numValues = 3 + properties.size();
+    const std::vector<float> table = vertexTable(mesh, frame, properties);
+    info.rasterSeconds = stage.seconds();
+    stage.restart();
+
+    const int width = frame.width, height = frame.height;
+    // Channel order in the band buffer: height, normal.x/y/z, mask, then the properties.
+    std::vector<std::string> names{"height", "normal.x", "normal.y", "normal.z", "mask"};
+    for (const VertexProperty& p : properties) names.push_back(p.name);
+    const Imf::Header header = mapHeader(frame, options, names);
     const std::size_t nc = names.size();
-    const std::size_t chunkPixels = std::size_t(width) * kRowsPerChunk;
-    std::vector<float> band(nc * chunkPixels);
-    std::vector<std::uint16_t> bandHalf;  // half bits when options.half
-    if (options.half) bandHalf.resize(nc * chunkPixels);
+    MapBand band(mesh, hits, table, numValues, width, nc, options.half);
 
     // OpenEXR writes through AtomicFile (a temporary file renamed on commit), which writes
     // past the page cache where it can (AtomicFile::Mode::Large).
@@ -175,68 +288,10 @@ FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, con
         Imf::OutputFile file(stream, header);
         const int numChunks = (height + kRowsPerChunk - 1) / kRowsPerChunk;
         if (progress) progress->start("writing the feature map", std::size_t(numChunks));
-        const float nan = std::numeric_limits<float>::quiet_NaN();
         for (int y0 = 0; y0 < height; y0 += kRowsPerChunk) {
             const int rows = std::min(kRowsPerChunk, height - y0);
-            // Per row, blocks of kBlockPixels: the values of a block's pixels are interpolated
-            // pixel by pixel from the rows of the vertex table (contiguous), then stored
-            // channel by channel (contiguous): a pixel's 70 values are not scattered over 70
-            // planes one at a time.
-            tbb::parallel_for(tbb::blocked_range<int>(0, rows), [&](const auto& r) {
-                std::vector<float> value(std::size_t(kBlockPixels) * numValues);
-                std::array<bool, kBlockPixels> hit{};
-                for (int y = r.begin(); y < r.end(); ++y)
-                    for (int x0 = 0; x0 < width; x0 += kBlockPixels) {
-                        const int count = std::min(kBlockPixels, width - x0);
-                        const std::size_t k0 = hits.index(x0, y0 + y);
-                        const std::size_t at = std::size_t(y) * std::size_t(width) + std::size_t(x0);
-                        for (int x = 0; x < count; ++x) {
-                            const std::size_t k = k0 + std::size_t(x);
-                            const std::uint32_t t = hits.triangle[k];
-                            band[at + std::size_t(x)] = hits.depth[k];
-                            band[4 * chunkPixels + at + std::size_t(x)] = t != PixelHits::kNone ? 1.0f : 0.0f;
-                            hit[std::size_t(x)] = t != PixelHits::kNone;
-                            if (t == PixelHits::kNone) continue;
-                            // Linear interpolation over the triangle (barycentric weights).
-                            const Triangle& tri = mesh.triangles[t];
-                            const float w1 = hits.b1[k], w2 = hits.b2[k], w0 = 1.0f - w1 - w2;
-                            const float* r0 = table.data() + std::size_t(tri[0]) * numValues;
-                            const float* r1 = table.data() + std::size_t(tri[1]) * numValues;
-                            const float* r2 = table.data() + std::size_t(tri[2]) * numValues;
-                            float* v = value.data() + std::size_t(x) * numValues;
-                            for (std::size_t q = 0; q < numValues; ++q) v[q] = w0 * r0[q] + w1 * r1[q] + w2 * r2[q];
-                            const float len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-                            for (int c = 0; c < 3; ++c) v[c] = len > 0 ? v[c] / len : nan;
-                        }
-                        // Channel c of the band holds value q = c − 2 (c >= 5) or c − 1 (normals).
-                        for (std::size_t q = 0; q < numValues; ++q) {
-                            float* out = band.data() + (q < 3 ? 1 + q : 2 + q) * chunkPixels + at;
-                            const float* v = value.data() + q;
-                            for (int x = 0; x < count; ++x)
-                                out[x] = hit[std::size_t(x)] ? v[std::size_t(x) * numValues] : nan;
-                        }
-                    }
-                // --half: the rows just filled, while they are in the cache.
-                if (options.half)
-                    for (std::size_t c = 0; c < nc; ++c) {
-                        const std::size_t from = c * chunkPixels + std::size_t(r.begin()) * std::size_t(width);
-                        floatsToHalf(band.data() + from, bandHalf.data() + from, std::size_t(r.size()) * std::size_t(width));
-                    }
-            });
-            Imf::FrameBuffer fb;
-            for (std::size_t c = 0; c < nc; ++c) {
-                // Slices address pixel (x, y) as base + x·xStride + y·yStride: shift by y0 rows.
-                if (options.half) {
-                    half* h = reinterpret_cast<half*>(bandHalf.data() + c * chunkPixels);
-                    char* base = reinterpret_cast<char*>(h) - std::ptrdiff_t(y0) * width * std::ptrdiff_t(sizeof(half));
-                    fb.insert(names[c], Imf::Slice(Imf::HALF, base, sizeof(half), sizeof(half) * std::size_t(width)));
-                } else {
-                    char* base = reinterpret_cast<char*>(band.data() + c * chunkPixels) -
-                                 std::ptrdiff_t(y0) * width * std::ptrdiff_t(sizeof(float));
-                    fb.insert(names[c], Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * std::size_t(width)));
-                }
-            }
-            file.setFrameBuffer(fb);
+            tbb::parallel_for(tbb::blocked_range<int>(0, rows), [&](const auto& r) { band.fillRows(y0, r); });
+            file.setFrameBuffer(band.frameBuffer(names, y0));
             file.writePixels(rows);
             if (progress) progress->advance();
         }

@@ -676,6 +676,189 @@ void validate(const TriMesh& mesh, const ExactOptions& options)
     }
 }
 
+/// The result before any value: the radii, the vertices to compute (all if none are
+/// chosen), and NaN for every value asked for.
+ExactResult unsetResult(const TriMesh& mesh, const ExactOptions& options)
+{
+    ExactResult result;
+    result.radii = options.radii;
+    const std::size_t nr = result.radii.size();
+    if (options.vertices.empty()) {
+        result.vertices.resize(mesh.numVertices());
+        for (std::size_t v = 0; v < mesh.numVertices(); ++v) result.vertices[v] = std::uint32_t(v);
+    } else {
+        result.vertices = options.vertices;
+    }
+    const std::size_t nk = result.vertices.size();
+    if (options.computeVolumeSphere) {
+        result.volume.assign(nr, std::vector<double>(nk, kNaN));
+        result.sphere.assign(nr, std::vector<double>(nk, kNaN));
+    }
+    if (options.computePatchLine) {
+        result.patch.assign(nr, std::vector<double>(nk, kNaN));
+        result.line.assign(nr, std::vector<double>(nk, kNaN));
+    }
+    return result;
+}
+
+std::vector<TriangleFrame> triangleFrames(const TriMesh& mesh)
+{
+    std::vector<TriangleFrame> frames(mesh.numTriangles());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, frames.size()), [&](const auto& range) {
+        for (std::size_t t = range.begin(); t < range.end(); ++t) {
+            const auto& tri = mesh.triangles[t];
+            frames[t] = makeFrame(mesh.points[tri[0]], mesh.points[tri[1]], mesh.points[tri[2]]);
+        }
+    });
+    return frames;
+}
+
+/// The triangles of one grid, with what the per-vertex loop reads of them in slot order.
+struct TriangleSet {
+    TriangleGrid grid;
+    std::vector<SlotTriangle> slots;
+    std::vector<SlotBound> bounds;
+};
+
+/// The triangles that may meet the balls of radius up to @p R about @p vertices, in cell
+/// order, in two grids: those within a cell (R/4) of their centroid, and the larger ones
+/// (module comment of TriangleGrid). Grids without triangles are left out.
+std::vector<TriangleSet> triangleSets(const TriMesh& mesh, const std::vector<TriangleFrame>& frames,
+                                      const std::vector<std::uint32_t>& vertices, double R)
+{
+    const double cell = 0.25 * R;
+    // With a few chosen vertices of a large mesh, only the triangles that may meet their
+    // balls: a triangle no larger than R whose centroid lies within 2 R of a vertex, found
+    // through cells of size R around the vertices (a hash of the cell; a collision only
+    // keeps a triangle more).
+    std::unordered_set<std::uint64_t> near;
+    const auto cellKey = [R](const Vec3& x, int dx, int dy, int dz) {
+        const auto index = [R](double c, int d) { return std::uint64_t(std::int64_t(std::floor(c / R)) + d); };
+        return index(x.x, dx) * 0x9E3779B97F4A7C15ULL ^ index(x.y, dy) * 0xC2B2AE3D27D4EB4FULL ^
+               index(x.z, dz) * 0x165667B19E3779F9ULL;
+    };
+    const bool someVertices = 4 * vertices.size() < mesh.numVertices();
+    if (someVertices)
+        for (const std::uint32_t v : vertices)
+            for (int dx = -2; dx <= 2; ++dx)
+                for (int dy = -2; dy <= 2; ++dy)
+                    for (int dz = -2; dz <= 2; ++dz) near.insert(cellKey(mesh.points[v], dx, dy, dz));
+    std::vector<std::uint32_t> small, large;
+    for (std::uint32_t t = 0; t < frames.size(); ++t) {
+        if (someVertices && frames[t].boundingRadius <= R && near.count(cellKey(frames[t].centroid, 0, 0, 0)) == 0)
+            continue;
+        (frames[t].boundingRadius <= cell ? small : large).push_back(t);
+    }
+    std::vector<TriangleSet> sets;
+    for (const auto* subset : {&small, &large}) {
+        if (subset->empty()) continue;
+        double largest = 0;
+        for (const std::uint32_t t : *subset) largest = std::max(largest, frames[t].boundingRadius);
+        TriangleSet set{TriangleGrid(frames, *subset, std::max(cell, largest)), {}, {}};
+        set.slots.resize(subset->size());
+        set.bounds.resize(subset->size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, subset->size()), [&](const auto& range) {
+            for (std::size_t s = range.begin(); s < range.end(); ++s) {
+                const std::uint32_t t = set.grid.triangleAt(s);
+                set.slots[s] = makeSlot(mesh, frames[t], t);
+                set.bounds[s] = {frames[t].centroid, frames[t].boundingRadius};
+            }
+        });
+        sets.push_back(std::move(set));
+    }
+    return sets;
+}
+
+/// The ball about one vertex p: what each triangle near it adds to its sums, for the
+/// unmasked radii [0, jEnd).
+struct VertexBall {
+    const Vec3& p;
+    double reach;  ///< the largest unmasked radius
+    std::size_t jEnd;
+    const std::vector<double>& radii;
+    const RadiusCounter& counter;
+    bool wantVS;
+    BallSums& sums;
+
+    /// Adds the triangle in @p slot of @p set (nothing if it lies beyond reach).
+    void add(const TriangleSet& set, std::uint32_t slot) const
+    {
+        const SlotBound& bound = set.bounds[slot];
+        const double slack = reach + bound.radius;
+        const double centroid2 = squaredNorm(bound.centroid - p);
+        if (centroid2 >= slack * slack) return;
+        const SlotTriangle& tri = set.slots[slot];
+        const std::array<Vec3, 3> q{tri.corner[0] - p, tri.corner[1] - p, tri.corner[2] - p};
+        const double q2[3] = {squaredNorm(q[0]), squaredNorm(q[1]), squaredNorm(q[2])};
+        // The first radius whose ball holds the whole triangle.
+        const std::size_t jWhole = counter.below(std::max({q2[0], q2[1], q2[2]}), jEnd);
+        double d;
+        // Straddled radii lie between the distances to the triangle and to its
+        // farthest corner. Most triangles straddle none, which shows without the
+        // distance to the triangle: for x = Σ λ_i corner_i in it, |x − p|² = Σ λ_i
+        // |corner_i − p|² − Σ λ_i |corner_i − x|² >= (nearest corner)² − ρ_t², as the
+        // weighted mean x minimises the last sum (<= its value about the centroid).
+        const double nearest2 = std::min({q2[0], q2[1], q2[2]});
+        if (jWhole > 0 && nearest2 - bound.radius * bound.radius < counter.squared(jWhole - 1)) {
+            // Corner nearest to p (the first of equals), as in LocalTriangle.
+            const int nearest = q2[0] <= q2[1] ? (q2[0] <= q2[2] ? 0 : 2) : (q2[1] <= q2[2] ? 1 : 2);
+            const Straddler straddler(tri, q, q2, nearest);
+            d = straddler.d;
+            std::size_t j = counter.atMost(straddler.near2, jEnd);
+            if (j < jWhole && !straddler.precise) {
+                TriangleFrame frame;
+                frame.n = tri.n;
+                frame.t1 = tri.t1;
+                frame.t2 = tri.t2;
+                frame.area = tri.area;
+                const LocalTriangle local(q, frame);
+                for (; j < jWhole; ++j) sums.addStraddled(j, local.sectors(radii[j], wantVS), d);
+            }
+            for (; j < jWhole; ++j) sums.addStraddled(j, straddler.fastMeasures(radii[j], wantVS), d);
+        } else {
+            // A triangle at p has d = 0 exactly, and no solid angle (its part is Ω_p);
+            // otherwise any corner gives d up to rounding.
+            d = nearest2 == 0 ? 0.0 : dot(q[0], tri.n);
+        }
+        if (jWhole >= jEnd) return;
+        if (!wantVS || d == 0) {
+            sums.addWhole(jWhole, tri.area, d, nullptr, 0);
+            return;
+        }
+        const double la = std::sqrt(q2[0]), lb = std::sqrt(q2[1]), lc = std::sqrt(q2[2]);
+        Complex solid = vanOosterom(q, la, lb, lc);
+        const double lengths = la * lb * lc, inverse = 1.0 / (lengths * centroid2);
+        const double scale = inverse * centroid2;
+        solid.re *= scale;
+        solid.im *= scale;
+        const double x = bound.radius * bound.radius * lengths * inverse;  // ρ_t² / D²
+        sums.addWhole(jWhole, tri.area, d, &solid, x < 1 ? kPi * x : kPi);
+    }
+};
+
+/// The values of the @p k-th vertex of @p result for the radii [0, jEnd) from its ball sums
+/// and the solid angle @p omegaP of the solid's cone at it.
+void storeVertex(BallSums& sums, double omegaP, std::size_t jEnd, std::size_t k, bool wantVS, bool wantPL,
+                 ExactResult& result)
+{
+    for (std::size_t j = 0; j < jEnd; ++j) {
+        double dArea = 0;
+        const Measures m = sums.total(j, dArea);
+        const double r = result.radii[j];
+        if (wantPL) {
+            result.patch[j][k] = m.area / (kPi * r * r);
+            result.line[j][k] = m.arcLength / (2 * kPi * r);
+        }
+        if (wantVS) {
+            // S/r² = Ω_p − Σ Ω_t;  3V = Σ d_t area_t + r S  (module comment).
+            const double s = (omegaP - m.solidAngle) * r * r;
+            const double vol = (dArea + r * s) / 3.0;
+            result.sphere[j][k] = s / (4 * kPi * r * r);
+            result.volume[j][k] = vol / (4.0 / 3.0 * kPi * r * r * r);
+        }
+    }
+}
+
 } // namespace
 
 TriangleBallMeasures triangleBallMeasures(const Vec3& p, const Vec3& a, const Vec3& b,
@@ -697,84 +880,16 @@ TriangleBallMeasures triangleBallMeasures(const Vec3& p, const Vec3& a, const Ve
 ExactResult computeExact(const TriMesh& mesh, const ExactOptions& options, RunContext* progress)
 {
     validate(mesh, options);
-    ExactResult result;
-    result.radii = options.radii;
+    ExactResult result = unsetResult(mesh, options);
     const auto& radii = result.radii;
     const std::size_t nr = radii.size();
-    if (options.vertices.empty()) {
-        result.vertices.resize(mesh.numVertices());
-        for (std::size_t v = 0; v < mesh.numVertices(); ++v) result.vertices[v] = std::uint32_t(v);
-    } else {
-        result.vertices = options.vertices;
-    }
     const std::size_t nk = result.vertices.size();
     const bool wantVS = options.computeVolumeSphere, wantPL = options.computePatchLine;
-    if (wantVS) {
-        result.volume.assign(nr, std::vector<double>(nk, kNaN));
-        result.sphere.assign(nr, std::vector<double>(nk, kNaN));
-    }
-    if (wantPL) {
-        result.patch.assign(nr, std::vector<double>(nk, kNaN));
-        result.line.assign(nr, std::vector<double>(nk, kNaN));
-    }
     if (nk == 0 || mesh.numTriangles() == 0 || !(wantVS || wantPL)) return result;
 
-    std::vector<TriangleFrame> frames(mesh.numTriangles());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, frames.size()), [&](const auto& range) {
-        for (std::size_t t = range.begin(); t < range.end(); ++t) {
-            const auto& tri = mesh.triangles[t];
-            frames[t] = makeFrame(mesh.points[tri[0]], mesh.points[tri[1]], mesh.points[tri[2]]);
-        }
-    });
+    const std::vector<TriangleFrame> frames = triangleFrames(mesh);
     const VertexFaces vf = wantVS ? vertexFaces(mesh) : VertexFaces{};
-    // Triangles in cell order, in two grids: those within a cell of their centroid, and the
-    // larger ones (module comment of TriangleGrid).
-    const double cell = 0.25 * radii.back();
-    // With a few chosen vertices of a large mesh, only the triangles that may meet their
-    // balls: a triangle no larger than R whose centroid lies within 2 R of a vertex, found
-    // through cells of size R around the vertices (a hash of the cell; a collision only
-    // keeps a triangle more).
-    const double R = radii.back();
-    std::unordered_set<std::uint64_t> near;
-    const auto cellKey = [R](const Vec3& x, int dx, int dy, int dz) {
-        const auto index = [R](double c, int d) { return std::uint64_t(std::int64_t(std::floor(c / R)) + d); };
-        return index(x.x, dx) * 0x9E3779B97F4A7C15ULL ^ index(x.y, dy) * 0xC2B2AE3D27D4EB4FULL ^
-               index(x.z, dz) * 0x165667B19E3779F9ULL;
-    };
-    const bool someVertices = 4 * nk < mesh.numVertices();
-    if (someVertices)
-        for (const std::uint32_t v : result.vertices)
-            for (int dx = -2; dx <= 2; ++dx)
-                for (int dy = -2; dy <= 2; ++dy)
-                    for (int dz = -2; dz <= 2; ++dz) near.insert(cellKey(mesh.points[v], dx, dy, dz));
-    std::vector<std::uint32_t> small, large;
-    for (std::uint32_t t = 0; t < frames.size(); ++t) {
-        if (someVertices && frames[t].boundingRadius <= R && near.count(cellKey(frames[t].centroid, 0, 0, 0)) == 0)
-            continue;
-        (frames[t].boundingRadius <= cell ? small : large).push_back(t);
-    }
-    struct TriangleSet {
-        TriangleGrid grid;
-        std::vector<SlotTriangle> slots;
-        std::vector<SlotBound> bounds;
-    };
-    std::vector<TriangleSet> sets;
-    for (const auto* subset : {&small, &large}) {
-        if (subset->empty()) continue;
-        double largest = 0;
-        for (const std::uint32_t t : *subset) largest = std::max(largest, frames[t].boundingRadius);
-        TriangleSet set{TriangleGrid(frames, *subset, std::max(cell, largest)), {}, {}};
-        set.slots.resize(subset->size());
-        set.bounds.resize(subset->size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, subset->size()), [&](const auto& range) {
-            for (std::size_t s = range.begin(); s < range.end(); ++s) {
-                const std::uint32_t t = set.grid.triangleAt(s);
-                set.slots[s] = makeSlot(mesh, frames[t], t);
-                set.bounds[s] = {frames[t].centroid, frames[t].boundingRadius};
-            }
-        });
-        sets.push_back(std::move(set));
-    }
+    const std::vector<TriangleSet> sets = triangleSets(mesh, frames, result.vertices, radii.back());
     const RadiusCounter counter(radii);
 
     if (progress) progress->start("exact invariants", nk);
@@ -789,79 +904,12 @@ ExactResult computeExact(const TriMesh& mesh, const ExactOptions& options, RunCo
                 jEnd = std::size_t(std::lower_bound(radii.begin(), radii.end(), options.borderDistance[v]) -
                                    radii.begin());
             if (jEnd == 0) continue;
-            const double reach = radii[jEnd - 1];
             sums.clear();
-
-            for (const TriangleSet& set : sets) set.grid.forEachNear(p, reach, [&](std::uint32_t slot) {
-                const SlotBound& bound = set.bounds[slot];
-                const double slack = reach + bound.radius;
-                const double centroid2 = squaredNorm(bound.centroid - p);
-                if (centroid2 >= slack * slack) return;
-                const SlotTriangle& tri = set.slots[slot];
-                const std::array<Vec3, 3> q{tri.corner[0] - p, tri.corner[1] - p, tri.corner[2] - p};
-                const double q2[3] = {squaredNorm(q[0]), squaredNorm(q[1]), squaredNorm(q[2])};
-                // The first radius whose ball holds the whole triangle.
-                const std::size_t jWhole = counter.below(std::max({q2[0], q2[1], q2[2]}), jEnd);
-                double d;
-                // Straddled radii lie between the distances to the triangle and to its
-                // farthest corner. Most triangles straddle none, which shows without the
-                // distance to the triangle: for x = Σ λ_i corner_i in it, |x − p|² = Σ λ_i
-                // |corner_i − p|² − Σ λ_i |corner_i − x|² >= (nearest corner)² − ρ_t², as the
-                // weighted mean x minimises the last sum (<= its value about the centroid).
-                const double nearest2 = std::min({q2[0], q2[1], q2[2]});
-                if (jWhole > 0 && nearest2 - bound.radius * bound.radius < counter.squared(jWhole - 1)) {
-                    // Corner nearest to p (the first of equals), as in LocalTriangle.
-                    const int nearest = q2[0] <= q2[1] ? (q2[0] <= q2[2] ? 0 : 2) : (q2[1] <= q2[2] ? 1 : 2);
-                    const Straddler straddler(tri, q, q2, nearest);
-                    d = straddler.d;
-                    std::size_t j = counter.atMost(straddler.near2, jEnd);
-                    if (j < jWhole && !straddler.precise) {
-                        TriangleFrame frame;
-                        frame.n = tri.n;
-                        frame.t1 = tri.t1;
-                        frame.t2 = tri.t2;
-                        frame.area = tri.area;
-                        const LocalTriangle local(q, frame);
-                        for (; j < jWhole; ++j) sums.addStraddled(j, local.sectors(radii[j], wantVS), d);
-                    }
-                    for (; j < jWhole; ++j) sums.addStraddled(j, straddler.fastMeasures(radii[j], wantVS), d);
-                } else {
-                    // A triangle at p has d = 0 exactly, and no solid angle (its part is Ω_p);
-                    // otherwise any corner gives d up to rounding.
-                    d = nearest2 == 0 ? 0.0 : dot(q[0], tri.n);
-                }
-                if (jWhole >= jEnd) return;
-                if (!wantVS || d == 0) {
-                    sums.addWhole(jWhole, tri.area, d, nullptr, 0);
-                    return;
-                }
-                const double la = std::sqrt(q2[0]), lb = std::sqrt(q2[1]), lc = std::sqrt(q2[2]);
-                Complex solid = vanOosterom(q, la, lb, lc);
-                const double lengths = la * lb * lc, inverse = 1.0 / (lengths * centroid2);
-                const double scale = inverse * centroid2;
-                solid.re *= scale;
-                solid.im *= scale;
-                const double x = bound.radius * bound.radius * lengths * inverse;  // ρ_t² / D²
-                sums.addWhole(jWhole, tri.area, d, &solid, x < 1 ? kPi * x : kPi);
-            });
-
+            const VertexBall ball{p, radii[jEnd - 1], jEnd, radii, counter, wantVS, sums};
+            for (const TriangleSet& set : sets)
+                set.grid.forEachNear(p, ball.reach, [&](std::uint32_t slot) { ball.add(set, slot); });
             const double omegaP = wantVS ? coneSolidAngle(mesh, frames, vf, v) : 0.0;
-            for (std::size_t j = 0; j < jEnd; ++j) {
-                double dArea = 0;
-                const Measures m = sums.total(j, dArea);
-                const double r = radii[j];
-                if (wantPL) {
-                    result.patch[j][k] = m.area / (kPi * r * r);
-                    result.line[j][k] = m.arcLength / (2 * kPi * r);
-                }
-                if (wantVS) {
-                    // S/r² = Ω_p − Σ Ω_t;  3V = Σ d_t area_t + r S  (module comment).
-                    const double s = (omegaP - m.solidAngle) * r * r;
-                    const double vol = (dArea + r * s) / 3.0;
-                    result.sphere[j][k] = s / (4 * kPi * r * r);
-                    result.volume[j][k] = vol / (4.0 / 3.0 * kPi * r * r * r);
-                }
-            }
+            storeVertex(sums, omegaP, jEnd, k, wantVS, wantPL, result);
         }
         if (progress) progress->advance(range.size());
     });

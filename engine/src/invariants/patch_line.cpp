@@ -39,6 +39,165 @@ using detail::makeLevelKernel;
 using detail::SampleParts;
 using detail::totalSize;
 
+namespace {
+
+/// @throw InvalidInputError for invalid radii, sample cell size or precision.
+void validateOptions(const PatchLineOptions& options)
+{
+    validateRadii(options.radii);
+    const double h0 = options.cellSize;
+    if (!(h0 > 0) || !std::isfinite(h0)) throw InvalidInputError("the sample cell size must be positive");
+    if (!(options.minCellsPerRadius >= 1))
+        throw InvalidInputError("the precision (cells per radius) must be at least 1");
+}
+
+/// @throw InvalidInputError if the border distances do not match the vertices, or the mesh
+/// reaches beyond the sample cells' coordinates.
+void validateMesh(const TriMesh& mesh, const PatchLineOptions& options)
+{
+    if (!options.borderDistance.empty() && options.borderDistance.size() != mesh.numVertices())
+        throw InvalidInputError("border distances do not match the vertex count");
+    for (const Vec3& p : mesh.points) {
+        const CellCoord c = cellOf(p, options.cellSize);
+        if (c.x < 0 || c.y < 0 || c.z < 0 || c.x >= kCoordLimit || c.y >= kCoordLimit || c.z >= kCoordLimit)
+            throw InvalidInputError("the mesh reaches more than a million sample cells from the origin; "
+                                    "use a larger voxel size or move the mesh near the origin");
+    }
+}
+
+/// The surface samples of levels 0 .. @p numLevels − 1, each coarser level from the one
+/// below; @p numSamples: those of the finest.
+std::vector<Level> sampleLevels(const TriMesh& mesh, double h0, int numLevels, std::size_t& numSamples)
+{
+    std::vector<Level> levels;
+    SampleParts sums = finestSamples(mesh, h0, numLevels - 1);
+    numSamples = totalSize(sums);
+    for (int l = 0; l < numLevels; ++l) {
+        if (l > 0) sums = coarser(sums);
+        levels.push_back(makeLevel(sums, h0, l));
+    }
+    return levels;
+}
+
+/// The radii evaluated on one level, and what they share there.
+struct LevelRadii {
+    std::vector<int> index;         ///< into the radii; empty if the level has none
+    LevelKernel kernel;
+    double binVariance = 0;         ///< of the binning's tent, bin²/6
+    std::vector<double> maskReach;  ///< per radius of the level: masked where the border is nearer
+};
+
+/// The radii of level @p l (@p levelOfRadius), its kernel and where the values are masked.
+/// @p planLevel: the level of each radius in the V/S plan.
+LevelRadii radiiOfLevel(const std::vector<double>& radii, const std::vector<int>& levelOfRadius,
+                        const std::vector<int>& planLevel, const Level& level, int l, double h0)
+{
+    LevelRadii out;
+    for (std::size_t j = 0; j < radii.size(); ++j)
+        if (levelOfRadius[j] == l) out.index.push_back(int(j));
+    if (out.index.empty()) return out;
+    std::vector<double> levelR;
+    for (int j : out.index) levelR.push_back(radii[std::size_t(j)]);
+    out.kernel = makeLevelKernel(levelR, level.h, l);
+    out.binVariance = out.kernel.bin * out.kernel.bin / 6.0;
+    // A value is masked when the kernel's reach, plus the spread of a sample, gets to a
+    // border: max(kernelReach, r + 4h) + 2 h0, with h the cell of the radius's level in
+    // the V/S plan, so at least where V and S are (r + 4h + 2 h0), also for a merged level.
+    out.maskReach.resize(levelR.size());
+    for (std::size_t k = 0; k < levelR.size(); ++k) {
+        const double r = levelR[k];
+        const double vs = r + 4.0 * h0 * std::ldexp(1.0, planLevel[std::size_t(out.index[k])]);
+        out.maskReach[k] = std::max(kernelReach(r, level.h, l), vs) + 2.0 * h0;
+    }
+    return out;
+}
+
+/// Stores the sums of a level's radii at the vertices into the result, normalised, where
+/// they are not masked.
+struct LevelStore {
+    const PatchLineOptions& options;
+    const LevelRadii& level;
+    PatchLineResult& result;
+
+    /// Whether the value of the level's radius @p k at vertex @p i is masked.
+    bool masked(std::size_t i, std::size_t k) const
+    {
+        return !options.borderDistance.empty() && level.maskReach[k] > options.borderDistance[i];
+    }
+
+    void operator()(std::size_t i, std::size_t k, double sumP, double sumL) const
+    {
+        const std::size_t j = std::size_t(level.index[k]);
+        const double r = options.radii[j];
+        if (masked(i, k)) return;
+        // K has no second moment, but the binning adds a tent of variance bin²/6 to the
+        // blur across r: P = π r² gives π (r² + bin²/6), divided out.
+        if (options.computePatch) result.patch[j][i] = float(sumP / (M_PI * (r * r + level.binVariance)));
+        if (options.computeLine) result.line[j][i] = float(sumL / (2.0 * M_PI * r));
+    }
+};
+
+/// The level's sums evaluated at the vertices themselves (but those to @p skip).
+void evaluateAtVertices(const Level& level, const LevelRadii& radii, double h0, const TriMesh& mesh,
+                        const std::vector<char>& skip, const LevelStore& store, RunContext* progress)
+{
+    const std::size_t nv = mesh.numVertices();
+    std::vector<float> sumP, sumL;
+    evaluatePoints(level, radii.kernel, h0, mesh.points, skip, sumP, sumL, progress);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& range) {
+        for (std::size_t i = range.begin(); i < range.end(); ++i)
+            for (std::size_t k = 0; k < radii.index.size(); ++k) store(i, k, sumP[k * nv + i], sumL[k * nv + i]);
+    });
+}
+
+/// The level's sums evaluated at its samples and fitted to the vertices (but those to
+/// @p skip); vertices the fit leaves unresolved are evaluated where they are. Returns
+/// how many were. @p vertexNormal: the mesh's, computed here on first use.
+std::size_t evaluateAtSamples(const Level& level, const LevelRadii& radii, double h0, const TriMesh& mesh,
+                              std::vector<Vec3>& vertexNormal, const std::vector<char>& skip,
+                              const LevelStore& store, RunContext* progress)
+{
+    const std::size_t nv = mesh.numVertices();
+    const std::size_t numSamples = level.cx.size();
+    std::vector<float> sumP, sumL;
+    std::vector<Vec3> at(numSamples);
+    for (std::size_t s = 0; s < numSamples; ++s) at[s] = Vec3(level.cx[s], level.cy[s], level.cz[s]);
+    evaluatePoints(level, radii.kernel, h0, at, std::vector<char>(numSamples, 0), sumP, sumL, progress);
+    if (vertexNormal.empty()) vertexNormal = vertexNormals(mesh, Vec3(0, 0, 1));
+    const int nr = int(radii.index.size());
+    std::vector<float> atP(std::size_t(nr) * nv), atL(std::size_t(nr) * nv);
+    std::vector<const float*> from;
+    std::vector<float*> to;
+    for (int k = 0; k < nr; ++k) {
+        from.push_back(sumP.data() + std::size_t(k) * numSamples);
+        from.push_back(sumL.data() + std::size_t(k) * numSamples);
+        to.push_back(atP.data() + std::size_t(k) * nv);
+        to.push_back(atL.data() + std::size_t(k) * nv);
+    }
+    std::vector<char> unresolved;
+    interpolateFromSamples(level, h0, mesh.points, vertexNormal, skip, 2 * nr, from, to, unresolved);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& range) {
+        for (std::size_t i = range.begin(); i < range.end(); ++i)
+            if (!skip[i] && !unresolved[i])
+                for (std::size_t k = 0; k < radii.index.size(); ++k) store(i, k, atP[k * nv + i], atL[k * nv + i]);
+    });
+    // Vertices on creases and corners: evaluated where they are.
+    std::vector<std::uint32_t> direct;
+    for (std::size_t i = 0; i < nv; ++i)
+        if (unresolved[i] && !skip[i]) direct.push_back(std::uint32_t(i));
+    if (!direct.empty()) {
+        std::vector<Vec3> points(direct.size());
+        for (std::size_t q = 0; q < direct.size(); ++q) points[q] = mesh.points[direct[q]];
+        evaluatePoints(level, radii.kernel, h0, points, std::vector<char>(direct.size(), 0), sumP, sumL, nullptr);
+        const std::size_t nd = direct.size();
+        for (std::size_t q = 0; q < nd; ++q)
+            for (std::size_t k = 0; k < radii.index.size(); ++k) store(direct[q], k, sumP[k * nd + q], sumL[k * nd + q]);
+    }
+    return direct.size();
+}
+
+} // namespace
+
 std::vector<int> patchLineLevelOfRadius(const std::vector<double>& radii, double h0, double minCellsPerRadius)
 {
     std::vector<int> level = gridLevelOfRadius(radii, h0, minCellsPerRadius);
@@ -58,22 +217,12 @@ std::vector<int> patchLineLevelOfRadius(const std::vector<double>& radii, double
 PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& options,
                                  RunContext* progress)
 {
+    validateOptions(options);
     const auto& radii = options.radii;
-    validateRadii(radii);
     const double h0 = options.cellSize;
-    if (!(h0 > 0) || !std::isfinite(h0)) throw InvalidInputError("the sample cell size must be positive");
-    if (!(options.minCellsPerRadius >= 1))
-        throw InvalidInputError("the precision (cells per radius) must be at least 1");
     const std::size_t nv = mesh.numVertices();
     const double spacing = options.vertexSpacing > 0 ? options.vertexSpacing : computeMeshStats(mesh).medianEdge;
-    if (!options.borderDistance.empty() && options.borderDistance.size() != nv)
-        throw InvalidInputError("border distances do not match the vertex count");
-    for (const Vec3& p : mesh.points) {
-        const CellCoord c = cellOf(p, h0);
-        if (c.x < 0 || c.y < 0 || c.z < 0 || c.x >= kCoordLimit || c.y >= kCoordLimit || c.z >= kCoordLimit)
-            throw InvalidInputError("the mesh reaches more than a million sample cells from the origin; "
-                                    "use a larger voxel size or move the mesh near the origin");
-    }
+    validateMesh(mesh, options);
 
     PatchLineResult result;
     result.radii = radii;
@@ -89,107 +238,30 @@ PatchLineResult computePatchLine(const TriMesh& mesh, const PatchLineOptions& op
     if (!options.computePatch && !options.computeLine) return result;
 
     Stopwatch stage;
-    std::vector<Level> levels;
-    {
-        SampleParts sums = finestSamples(mesh, h0, numLevels - 1);
-        result.numSamples = totalSize(sums);
-        for (int l = 0; l < numLevels; ++l) {
-            if (l > 0) sums = coarser(sums);
-            levels.push_back(makeLevel(sums, h0, l));
-        }
-    }
+    const std::vector<Level> levels = sampleLevels(mesh, h0, numLevels, result.numSamples);
     result.samplingSeconds = stage.seconds();
     stage.restart();
 
     std::vector<Vec3> vertexNormal;                // for interpolation, when needed
-
     for (int l = 0; l < numLevels; ++l) {
-        std::vector<int> levelRadii;
-        for (std::size_t j = 0; j < radii.size(); ++j)
-            if (result.levelOfRadius[j] == l) levelRadii.push_back(int(j));
-        if (levelRadii.empty()) continue;
         const Level& level = levels[std::size_t(l)];
-        std::vector<double> levelR;
-        for (int j : levelRadii) levelR.push_back(radii[std::size_t(j)]);
-        const LevelKernel kernel = makeLevelKernel(levelR, level.h, l);
-        const double binVariance = kernel.bin * kernel.bin / 6.0;
-        // A value is masked when the kernel's reach, plus the spread of a sample, gets to a
-        // border: max(kernelReach, r + 4h) + 2 h0, with h the cell of the radius's level in
-        // the V/S plan, so at least where V and S are (r + 4h + 2 h0), also for a merged level.
-        std::vector<double> maskReach(levelR.size());  // per radius of the level
-        for (std::size_t k = 0; k < levelR.size(); ++k) {
-            const double r = levelR[k];
-            const double vs = r + 4.0 * h0 * std::ldexp(1.0, planLevel[std::size_t(levelRadii[k])]);
-            maskReach[k] = std::max(kernelReach(r, level.h, l), vs) + 2.0 * h0;
-        }
-        const auto masked = [&](std::size_t i, std::size_t k) {
-            return !options.borderDistance.empty() && maskReach[k] > options.borderDistance[i];
-        };
-        const auto store = [&](std::size_t i, std::size_t k, double sumP, double sumL) {
-            const std::size_t j = std::size_t(levelRadii[k]);
-            const double r = radii[j];
-            if (masked(i, k)) return;
-            // K has no second moment, but the binning adds a tent of variance bin²/6 to the
-            // blur across r: P = π r² gives π (r² + bin²/6), divided out.
-            if (options.computePatch) result.patch[j][i] = float(sumP / (M_PI * (r * r + binVariance)));
-            if (options.computeLine) result.line[j][i] = float(sumL / (2.0 * M_PI * r));
-        };
+        const LevelRadii levelRadii = radiiOfLevel(radii, result.levelOfRadius, planLevel, level, l, h0);
+        if (levelRadii.index.empty()) continue;
+        const LevelStore store{options, levelRadii, result};
         std::vector<char> skip(nv);  // every radius of the level is masked
-        for (std::size_t i = 0; i < nv; ++i) skip[i] = masked(i, 0);
-        std::vector<float> sumP, sumL;
-        const std::size_t numSamples = level.cx.size();
+        for (std::size_t i = 0; i < nv; ++i) skip[i] = store.masked(i, 0);
         if (level.h <= kDirectCellsPerSpacing * spacing) {
             // Cells about the vertex spacing or finer, so about as many samples as vertices
             // or more: evaluate at the vertices themselves. Decided from the whole mesh's
             // spacing, not from this mesh's counts, so that a tile with more or less of the
             // surface per vertex than the whole takes the same route (bit-identical tiles).
-            evaluatePoints(level, kernel, h0, mesh.points, skip, sumP, sumL, progress);
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& range) {
-                for (std::size_t i = range.begin(); i < range.end(); ++i)
-                    for (std::size_t k = 0; k < levelRadii.size(); ++k)
-                        store(i, k, sumP[k * nv + i], sumL[k * nv + i]);
-            });
+            evaluateAtVertices(level, levelRadii, h0, mesh, skip, store, progress);
         } else {
             // Far fewer samples than vertices (coarse levels of dense meshes): evaluate at the
             // samples (one per cell, on the surface) and interpolate to the vertices. P̂ and L̂
             // vary on the scale of r >= minCellsPerRadius·h, so a linear fit over 2h loses
             // about (h/r)²/8 of their variation.
-            std::vector<Vec3> at(numSamples);
-            for (std::size_t s = 0; s < numSamples; ++s) at[s] = Vec3(level.cx[s], level.cy[s], level.cz[s]);
-            evaluatePoints(level, kernel, h0, at, std::vector<char>(numSamples, 0), sumP, sumL, progress);
-            if (vertexNormal.empty()) vertexNormal = vertexNormals(mesh, Vec3(0, 0, 1));
-            const int nr = int(levelRadii.size());
-            std::vector<float> atP(std::size_t(nr) * nv), atL(std::size_t(nr) * nv);
-            std::vector<const float*> from;
-            std::vector<float*> to;
-            for (int k = 0; k < nr; ++k) {
-                from.push_back(sumP.data() + std::size_t(k) * numSamples);
-                from.push_back(sumL.data() + std::size_t(k) * numSamples);
-                to.push_back(atP.data() + std::size_t(k) * nv);
-                to.push_back(atL.data() + std::size_t(k) * nv);
-            }
-            std::vector<char> unresolved;
-            interpolateFromSamples(level, h0, mesh.points, vertexNormal, skip, 2 * nr, from, to, unresolved);
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& range) {
-                for (std::size_t i = range.begin(); i < range.end(); ++i)
-                    if (!skip[i] && !unresolved[i])
-                        for (std::size_t k = 0; k < levelRadii.size(); ++k)
-                            store(i, k, atP[k * nv + i], atL[k * nv + i]);
-            });
-            // Vertices on creases and corners: evaluated where they are.
-            std::vector<std::uint32_t> direct;
-            for (std::size_t i = 0; i < nv; ++i)
-                if (unresolved[i] && !skip[i]) direct.push_back(std::uint32_t(i));
-            result.directEvaluations += direct.size();
-            if (!direct.empty()) {
-                std::vector<Vec3> points(direct.size());
-                for (std::size_t q = 0; q < direct.size(); ++q) points[q] = mesh.points[direct[q]];
-                evaluatePoints(level, kernel, h0, points, std::vector<char>(direct.size(), 0), sumP, sumL, nullptr);
-                const std::size_t nd = direct.size();
-                for (std::size_t q = 0; q < nd; ++q)
-                    for (std::size_t k = 0; k < levelRadii.size(); ++k)
-                        store(direct[q], k, sumP[k * nd + q], sumL[k * nd + q]);
-            }
+            result.directEvaluations += evaluateAtSamples(level, levelRadii, h0, mesh, vertexNormal, skip, store, progress);
         }
     }
     result.gatherSeconds = stage.seconds();

@@ -73,6 +73,178 @@ constexpr int kGroupBits = 3;
 /// Samples per run with a bounding box in a group's list (evaluatePoints).
 constexpr std::size_t kChunk = 16;
 
+/// Bounding boxes (min x, y, z, max x, y, z) of the runs of kChunk samples of @p near
+/// (close together in Morton order), so that a point can skip the runs wholly beyond its reach.
+void boundChunks(const Gathered& near, std::vector<std::array<float, 6>>& chunkBox)
+{
+    const std::size_t ns = near.x.size();
+    const std::size_t numChunks = (ns + kChunk - 1) / kChunk;
+    chunkBox.resize(numChunks);
+    for (std::size_t c = 0; c < numChunks; ++c) {
+        auto& box = chunkBox[c];
+        box = {near.x[c * kChunk], near.y[c * kChunk], near.z[c * kChunk],
+               near.x[c * kChunk], near.y[c * kChunk], near.z[c * kChunk]};
+        for (std::size_t k = c * kChunk; k < std::min(ns, (c + 1) * kChunk); ++k) {
+            box[0] = std::min(box[0], near.x[k]), box[3] = std::max(box[3], near.x[k]);
+            box[1] = std::min(box[1], near.y[k]), box[4] = std::max(box[4], near.y[k]);
+            box[2] = std::min(box[2], near.z[k]), box[5] = std::max(box[5], near.z[k]);
+        }
+    }
+}
+
+/// A group of points: its first cell on the level and the origin that its gathered samples
+/// and its points are measured from (floats relative to it keep their precision).
+struct GroupOrigin {
+    std::int64_t gx, gy, gz;
+    double ox, oy, oz;
+};
+
+/// Per-thread buffers of evaluatePoints.
+struct GatherScratch {
+    Gathered near;
+    std::vector<std::array<float, 6>> chunkBox;  // min x, y, z, max x, y, z
+    std::vector<std::int32_t> bins;
+    std::vector<float> share;
+    std::vector<float> channels;  // kChannels per sample
+    std::vector<Channels> hist;   // numBins + 1
+};
+
+/// The kernel sums of one level at points in groups of cells (evaluatePoints): what every
+/// group shares, the samples gathered for a group, and the sums at each of its points.
+class LevelGather {
+public:
+    LevelGather(const Level& level, const LevelKernel& kernel)
+        : mLevel(level), mKernel(kernel), mL(level.index), mH(level.h), mReachCells(kernel.reachCells),
+          mNumBins(kernel.numBins), mNumRadii(kernel.numRadii), mGroupCells(std::int64_t(1) << kGroupBits),
+          mGroupSide(double(mGroupCells) * mH), mReach2(kernel.reach * kernel.reach),
+          mGroupBox{0, 0, 0, mGroupSide, mGroupSide, mGroupSide},
+          // A run of samples is skipped only if its box lies beyond reach with a margin
+          // against rounding: the samples binned, and their order, are those of the whole list.
+          mSkipBeyond2(1.001f * float(mReach2))
+    {
+    }
+
+    /// Buffers for one thread.
+    GatherScratch scratch() const
+    {
+        GatherScratch s;
+        s.hist.resize(static_cast<std::size_t>(mNumBins) + 1);
+        return s;
+    }
+
+    /// The group whose first point lies in the level-l cell @p c0.
+    GroupOrigin groupOrigin(const CellCoord& c0) const
+    {
+        GroupOrigin g;
+        g.gx = c0.x & ~(mGroupCells - 1), g.gy = c0.y & ~(mGroupCells - 1), g.gz = c0.z & ~(mGroupCells - 1);
+        g.ox = double(g.gx - (kOffset >> mL)) * mH, g.oy = double(g.gy - (kOffset >> mL)) * mH,
+        g.oz = double(g.gz - (kOffset >> mL)) * mH;
+        return g;
+    }
+
+    /// The samples within reach of the group's box [0, groupSide)³, relative to its origin,
+    /// into @p near, and the bounding boxes of their runs.
+    void gather(const GroupOrigin& g, GatherScratch& scratch) const
+    {
+        Gathered& near = scratch.near;
+        near.clear();
+        const std::int64_t lo[3] = {g.gx - mReachCells, g.gy - mReachCells, g.gz - mReachCells};
+        const std::int64_t hi[3] = {g.gx + mGroupCells - 1 + mReachCells, g.gy + mGroupCells - 1 + mReachCells,
+                                    g.gz + mGroupCells - 1 + mReachCells};
+        forEachSampleInCells(mLevel, lo, hi, [&](std::uint32_t s) {
+            // Only samples within reach of the group's box (the blocks bring more).
+            const double x = mLevel.cx[s] - g.ox, y = mLevel.cy[s] - g.oy, z = mLevel.cz[s] - g.oz;
+            if (squaredDistanceToBox(x, y, z, mGroupBox) >= mReach2) return;
+            near.x.push_back(float(x));
+            near.y.push_back(float(y));
+            near.z.push_back(float(z));
+            near.a.push_back(mLevel.area[s]);
+            for (std::size_t c = 0; c < 6; ++c) {
+                near.t[c].push_back(mLevel.tensor[c][s]);
+                near.c[c].push_back(mLevel.covariance[c][s]);
+            }
+        });
+        const std::size_t ns = near.x.size();
+        scratch.bins.resize(ns), scratch.share.resize(ns), scratch.channels.resize(kChannels * ns);
+        boundChunks(near, scratch.chunkBox);
+    }
+
+    /// The histograms over the distance from the point (px, py, pz) (relative to the
+    /// group's origin) of the gathered samples within its reach, into scratch.hist.
+    void histogram(float px, float py, float pz, GatherScratch& scratch) const
+    {
+        const Gathered& near = scratch.near;
+        const std::vector<std::array<float, 6>>& chunkBox = scratch.chunkBox;
+        std::vector<Channels>& hist = scratch.hist;
+        const std::size_t ns = near.x.size(), numChunks = chunkBox.size();
+        const int numBins = mNumBins;
+        const auto beyondReach = [&](std::size_t c) {
+            return squaredDistanceToBox(px, py, pz, chunkBox[c]) > mSkipBeyond2;
+        };
+        std::fill(hist.begin(), hist.end(), Channels{});
+        // Runs of consecutive chunks within reach; the chunk that ends a run is
+        // beyond it and is stepped over (c + 1) without a second test.
+        for (std::size_t c = 0; c < numChunks; ++c) {
+            if (beyondReach(c)) continue;
+            const std::size_t first = c * kChunk;
+            while (c < numChunks && !beyondReach(c)) ++c;
+            const std::size_t count = std::min(ns, c * kChunk) - first;
+            binSamples(count, near.x.data() + first, near.y.data() + first, near.z.data() + first,
+                       near.a.data() + first, near.t[0].data() + first, near.t[1].data() + first,
+                       near.t[2].data() + first, near.t[3].data() + first, near.t[4].data() + first,
+                       near.t[5].data() + first, near.c[0].data() + first, near.c[1].data() + first,
+                       near.c[2].data() + first, near.c[3].data() + first, near.c[4].data() + first,
+                       near.c[5].data() + first, px, py, pz, float(mReach2), float(1.0 / mKernel.bin),
+                       float(0.5 * mH), numBins, scratch.bins.data(), scratch.share.data(),
+                       scratch.channels.data());
+            for (std::size_t s = 0; s < count; ++s) {
+                if (scratch.bins[s] == numBins) continue;  // beyond reach
+                Channels* at = hist.data() + scratch.bins[s];
+                const Channels v = loadChannels(scratch.channels.data() + kChannels * s), vw = v * scratch.share[s];
+                at[0] += v - vw;  // bin b
+                at[1] += vw;      // bin b + 1
+            }
+        }
+    }
+
+    /// The histograms @p hist weighed with the kernel of each radius k of the level: P and
+    /// L at point @p i of @p n, into outP[k·n + i] and outL[k·n + i].
+    void weigh(const std::vector<Channels>& hist, std::size_t i, std::size_t n, std::vector<float>& outP,
+               std::vector<float>& outL) const
+    {
+        double inside = 0;  // area of the bins below `counted`
+        int counted = 0;
+        for (int k = 0; k < mNumRadii; ++k) {
+            const auto [firstP, lastP] = mKernel.patchBins[std::size_t(k)];
+            if (firstP < counted) inside = 0, counted = 0;  // not expected: radii ascend
+            for (; counted < firstP; ++counted) inside += double(hist[std::size_t(counted)][0]);
+            // Bins [firstP, lastP) hold the kernel's support for P and L alike; in
+            // pairs of bins: P in the channels 0 and 2, L in 1 and 3.
+            const float* wk = mKernel.weights.data() + std::size_t(k) * kChannels * mKernel.numBins;
+            Channels even{}, odd{};
+            for (int b = firstP; b < lastP; b += 2) {
+                even += hist[std::size_t(b)] * loadChannels(wk + kChannels * std::size_t(b));
+                odd += hist[std::size_t(b) + 1] * loadChannels(wk + kChannels * (std::size_t(b) + 1));
+            }
+            const double sumP = inside + double(even[0] + even[2]) + double(odd[0] + odd[2]);
+            const double sumL = double(even[1] + even[3]) + double(odd[1] + odd[3]);
+            outP[std::size_t(k) * n + i] = float(sumP);
+            outL[std::size_t(k) * n + i] = float(sumL);
+        }
+    }
+
+private:
+    const Level& mLevel;
+    const LevelKernel& mKernel;
+    const int mL;
+    const double mH;
+    const int mReachCells, mNumBins, mNumRadii;
+    const std::int64_t mGroupCells;
+    const double mGroupSide, mReach2;
+    const std::array<double, 6> mGroupBox;  // about the group's origin
+    const float mSkipBeyond2;
+};
+
 } // namespace
 
 CellGroups groupByCells(const std::vector<Vec3>& points, double h0, int l, int groupBits)
@@ -102,120 +274,26 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                     std::vector<float>& outP, std::vector<float>& outL, RunContext* progress)
 {
     const std::size_t n = points.size();
-    const int l = level.index;
-    const double h = level.h;
     outP.assign(std::size_t(kernel.numRadii) * n, 0.0f);
     outL.assign(std::size_t(kernel.numRadii) * n, 0.0f);
-    const CellGroups groups = groupByCells(points, h0, l, kGroupBits);
+    const CellGroups groups = groupByCells(points, h0, level.index, kGroupBits);
     const auto& order = groups.order;
     const auto& groupStart = groups.start;
-    const auto& cell = groups.cell;
-
-    const int reachCells = kernel.reachCells, numBins = kernel.numBins, nr = kernel.numRadii;
-    const std::int64_t groupCells = std::int64_t(1) << kGroupBits;
-    const double groupSide = double(groupCells) * h, reach2 = kernel.reach * kernel.reach;
-    const std::array<double, 6> groupBox{0, 0, 0, groupSide, groupSide, groupSide};  // about (ox, oy, oz)
-    // A run of samples is skipped only if its box lies beyond reach with a margin against
-    // rounding: the samples binned, and their order, are those of the whole list.
-    const float skipBeyond2 = 1.001f * float(reach2);
-    if (progress) progress->start("P and L, level " + std::to_string(l), groupStart.size() - 1);
+    const LevelGather gather(level, kernel);
+    if (progress) progress->start("P and L, level " + std::to_string(level.index), groupStart.size() - 1);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groupStart.size() - 1), [&](const auto& range) {
-        Gathered near;
-        std::vector<std::int32_t> bins;
-        std::vector<float> share;
-        std::vector<float> channels;  // kChannels per sample
-        std::vector<std::array<float, 6>> chunkBox;  // min x, y, z, max x, y, z
-        std::vector<Channels> hist(static_cast<std::size_t>(numBins) + 1);
+        GatherScratch scratch = gather.scratch();
         for (std::size_t g = range.begin(); g < range.end(); ++g) {
             const std::size_t begin = groupStart[g], end = groupStart[g + 1];
-            const CellCoord& c0 = cell[order[begin].second];
-            const std::int64_t gx = c0.x & ~(groupCells - 1), gy = c0.y & ~(groupCells - 1), gz = c0.z & ~(groupCells - 1);
-            const double ox = double(gx - (kOffset >> l)) * h, oy = double(gy - (kOffset >> l)) * h,
-                         oz = double(gz - (kOffset >> l)) * h;
-            near.clear();
-            const std::int64_t lo[3] = {gx - reachCells, gy - reachCells, gz - reachCells};
-            const std::int64_t hi[3] = {gx + groupCells - 1 + reachCells, gy + groupCells - 1 + reachCells,
-                                        gz + groupCells - 1 + reachCells};
-            forEachSampleInCells(level, lo, hi, [&](std::uint32_t s) {
-                // Only samples within reach of the group's box [0, groupSide)³ (the blocks
-                // bring more).
-                const double x = level.cx[s] - ox, y = level.cy[s] - oy, z = level.cz[s] - oz;
-                if (squaredDistanceToBox(x, y, z, groupBox) >= reach2) return;
-                near.x.push_back(float(x));
-                near.y.push_back(float(y));
-                near.z.push_back(float(z));
-                near.a.push_back(level.area[s]);
-                for (std::size_t c = 0; c < 6; ++c) {
-                    near.t[c].push_back(level.tensor[c][s]);
-                    near.c[c].push_back(level.covariance[c][s]);
-                }
-            });
-            const std::size_t ns = near.x.size();
-            bins.resize(ns), share.resize(ns), channels.resize(kChannels * ns);
-            // Bounding boxes of runs of kChunk samples (close together in Morton order): a
-            // point skips the runs wholly beyond its reach (about a fifth of the list).
-            const std::size_t numChunks = (ns + kChunk - 1) / kChunk;
-            chunkBox.resize(numChunks);
-            for (std::size_t c = 0; c < numChunks; ++c) {
-                auto& box = chunkBox[c];
-                box = {near.x[c * kChunk], near.y[c * kChunk], near.z[c * kChunk],
-                       near.x[c * kChunk], near.y[c * kChunk], near.z[c * kChunk]};
-                for (std::size_t k = c * kChunk; k < std::min(ns, (c + 1) * kChunk); ++k) {
-                    box[0] = std::min(box[0], near.x[k]), box[3] = std::max(box[3], near.x[k]);
-                    box[1] = std::min(box[1], near.y[k]), box[4] = std::max(box[4], near.y[k]);
-                    box[2] = std::min(box[2], near.z[k]), box[5] = std::max(box[5], near.z[k]);
-                }
-            }
+            const GroupOrigin origin = gather.groupOrigin(groups.cell[order[begin].second]);
+            gather.gather(origin, scratch);
             for (std::size_t q = begin; q < end; ++q) {
                 const std::uint32_t i = order[q].second;
                 if (skip[i]) continue;
-                const float px = float(points[i].x - ox), py = float(points[i].y - oy), pz = float(points[i].z - oz);
-                const auto beyondReach = [&](std::size_t c) {
-                    return squaredDistanceToBox(px, py, pz, chunkBox[c]) > skipBeyond2;
-                };
-                std::fill(hist.begin(), hist.end(), Channels{});
-                // Runs of consecutive chunks within reach; the chunk that ends a run is
-                // beyond it and is stepped over (c + 1) without a second test.
-                for (std::size_t c = 0; c < numChunks; ++c) {
-                    if (beyondReach(c)) continue;
-                    const std::size_t first = c * kChunk;
-                    while (c < numChunks && !beyondReach(c)) ++c;
-                    const std::size_t count = std::min(ns, c * kChunk) - first;
-                    binSamples(count, near.x.data() + first, near.y.data() + first, near.z.data() + first,
-                               near.a.data() + first, near.t[0].data() + first, near.t[1].data() + first,
-                               near.t[2].data() + first, near.t[3].data() + first, near.t[4].data() + first,
-                               near.t[5].data() + first, near.c[0].data() + first, near.c[1].data() + first,
-                               near.c[2].data() + first, near.c[3].data() + first, near.c[4].data() + first,
-                               near.c[5].data() + first, px, py, pz, float(reach2), float(1.0 / kernel.bin),
-                               float(0.5 * h), numBins, bins.data(), share.data(),
-                               channels.data());
-                    for (std::size_t s = 0; s < count; ++s) {
-                        if (bins[s] == numBins) continue;  // beyond reach
-                        Channels* at = hist.data() + bins[s];
-                        const Channels v = loadChannels(channels.data() + kChannels * s), vw = v * share[s];
-                        at[0] += v - vw;  // bin b
-                        at[1] += vw;      // bin b + 1
-                    }
-                }
-                double inside = 0;  // area of the bins below `counted`
-                int counted = 0;
-                for (int k = 0; k < nr; ++k) {
-                    const auto [firstP, lastP] = kernel.patchBins[std::size_t(k)];
-                    if (firstP < counted) inside = 0, counted = 0;  // not expected: radii ascend
-                    for (; counted < firstP; ++counted) inside += double(hist[std::size_t(counted)][0]);
-                    // Bins [firstP, lastP) hold the kernel's support for P and L alike; in
-                    // pairs of bins: P in the channels 0 and 2, L in 1 and 3.
-                    const float* wk = kernel.weights.data() + std::size_t(k) * kChannels * kernel.numBins;
-                    Channels even{}, odd{};
-                    for (int b = firstP; b < lastP; b += 2) {
-                        even += hist[std::size_t(b)] * loadChannels(wk + kChannels * std::size_t(b));
-                        odd += hist[std::size_t(b) + 1] * loadChannels(wk + kChannels * (std::size_t(b) + 1));
-                    }
-                    const double sumP = inside + double(even[0] + even[2]) + double(odd[0] + odd[2]);
-                    const double sumL = double(even[1] + even[3]) + double(odd[1] + odd[3]);
-                    outP[std::size_t(k) * n + i] = float(sumP);
-                    outL[std::size_t(k) * n + i] = float(sumL);
-                }
+                const float px = float(points[i].x - origin.ox), py = float(points[i].y - origin.oy),
+                            pz = float(points[i].z - origin.oz);
+                gather.histogram(px, py, pz, scratch);
+                gather.weigh(scratch.hist, i, n, outP, outL);
             }
             if (progress) progress->advance();
         }

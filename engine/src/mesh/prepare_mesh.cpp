@@ -290,67 +290,80 @@ std::vector<float> filledShareOf(const TriMesh& mesh, std::size_t firstFill, dou
     return share;
 }
 
-} // namespace
+/// The repairs prepareMesh makes, recorded as they are made; with repair off, the first
+/// problem that would need one refuses the mesh instead.
+class RepairLog {
+public:
+    RepairLog(bool repair, std::vector<Diagnostic>& changes) : mRepair(repair), mChanges(changes) {}
 
-double defaultMaxHolePerimeter(double radius) { return M_PI * radius; }
+    /// Records a repair of @p count things (@p done says what was done).
+    /// @throw InvalidInputError naming @p problem if repair is off.
+    void record(const char* kind, std::size_t count, const std::string& problem, const std::string& done) const
+    {
+        if (!mRepair) throw InvalidInputError("the mesh has " + problem + ", and repair is off");
+        mChanges.push_back({kind, count, {}, done});
+    }
 
-PrepareMeshResult prepareMesh(const TriMesh& input, const PrepareMeshOptions& options)
+private:
+    bool mRepair;
+    std::vector<Diagnostic>& mChanges;
+};
+
+/// Step 1: refuses what cannot be repaired (no vertices or faces, too many vertices,
+/// non-finite coordinates, face indices out of range).
+void refuseUnrepairable(const TriMesh& input)
 {
     if (input.points.empty()) throw InvalidInputError("the mesh has no vertices");
     if (input.triangles.empty()) throw InvalidInputError("the mesh has no faces");
     const std::size_t n = input.numVertices();
     if (n >= std::size_t(kNone)) throw InvalidInputError("the mesh has more than 2^32 - 1 vertices");
+    std::size_t nonFinite = 0;
+    for (const Vec3& p : input.points) nonFinite += !isFinite(p);
+    if (nonFinite > 0)
+        throw InvalidInputError("the mesh has " + plural(nonFinite, "vertex", "vertices") +
+                                " with NaN or infinite coordinates");
+    for (std::size_t f = 0; f < input.numTriangles(); ++f)
+        for (std::uint32_t v : input.triangles[f])
+            if (v >= n)
+                throw InvalidInputError("face " + std::to_string(f) + " refers to vertex " + std::to_string(v) +
+                                        " but the mesh has only " + plural(n, "vertex", "vertices"));
+}
 
-    // 1. What cannot be repaired.
-    {
-        std::size_t nonFinite = 0;
-        for (const Vec3& p : input.points) nonFinite += !isFinite(p);
-        if (nonFinite > 0)
-            throw InvalidInputError("the mesh has " + plural(nonFinite, "vertex", "vertices") +
-                                    " with NaN or infinite coordinates");
-        for (std::size_t f = 0; f < input.numTriangles(); ++f)
-            for (std::uint32_t v : input.triangles[f])
-                if (v >= n)
-                    throw InvalidInputError("face " + std::to_string(f) + " refers to vertex " + std::to_string(v) +
-                                            " but the mesh has only " + plural(n, "vertex", "vertices"));
-    }
-
-    PrepareMeshResult result;
-    // A repair made, or with repair off the reason to refuse the mesh.
-    const auto change = [&](const char* kind, std::size_t count, const std::string& problem, const std::string& done) {
-        if (!options.repair) throw InvalidInputError("the mesh has " + problem + ", and repair is off");
-        result.changes.push_back({kind, count, {}, done});
-    };
-
-    // 2. Vertices at the same position become one.
-    TriMesh work;
-    work.points = input.points;
-    work.triangles = input.triangles;
+/// Step 2: vertices at the same position become one; @p triangles (the input's) then refer
+/// to the first of them. Returns that vertex for each input vertex (itself if none).
+std::vector<std::uint32_t> mergeSamePositions(const std::vector<Vec3>& points, std::vector<Triangle>& triangles,
+                                              const RepairLog& log)
+{
     std::size_t numMerged = 0;
-    std::vector<std::uint32_t> rep = samePositionRepresentatives(input.points, numMerged);
+    std::vector<std::uint32_t> rep = samePositionRepresentatives(points, numMerged);
     if (numMerged > 0) {
-        for (Triangle& t : work.triangles)
+        for (Triangle& t : triangles)
             for (std::uint32_t& v : t) v = rep[v];
-        change("duplicate_vertices_merged", numMerged,
-               plural(numMerged, "vertex", "vertices") + " at exactly the position of another",
-               "merged " + plural(numMerged, "vertex", "vertices") +
-                   " with another at exactly the same position (texture seams, triangle soups)");
+        log.record("duplicate_vertices_merged", numMerged,
+                   plural(numMerged, "vertex", "vertices") + " at exactly the position of another",
+                   "merged " + plural(numMerged, "vertex", "vertices") +
+                       " with another at exactly the same position (texture seams, triangle soups)");
     }
+    return rep;
+}
 
-    // 3. and 4. Faces that make no surface.
+/// Steps 3 and 4: removes the faces that make no surface (degenerate, duplicate, around
+/// non-manifold edges). Returns the check of the faces after step 3.
+MeshCheckResult removeFacesWithoutSurface(TriMesh& work, const RepairLog& log)
+{
     MeshCheckResult check = checkMesh(work);
     if (check.numDegenerateFaces > 0 || check.numDuplicateFaces > 0) {
         const std::size_t degenerate = check.numDegenerateFaces, duplicate = check.numDuplicateFaces;
         if (degenerate > 0)
-            change("degenerate_faces_removed", degenerate,
-                   plural(degenerate, "degenerate face", "degenerate faces") + " (a repeated vertex, or no area)",
-                   "removed " + plural(degenerate, "degenerate face", "degenerate faces") +
-                       " (a repeated vertex, or no area)");
+            log.record("degenerate_faces_removed", degenerate,
+                       plural(degenerate, "degenerate face", "degenerate faces") + " (a repeated vertex, or no area)",
+                       "removed " + plural(degenerate, "degenerate face", "degenerate faces") +
+                           " (a repeated vertex, or no area)");
         if (duplicate > 0)
-            change("duplicate_faces_removed", duplicate,
-                   plural(duplicate, "duplicate face", "duplicate faces") + " (the same vertices as an earlier face)",
-                   "removed " + plural(duplicate, "duplicate face", "duplicate faces") +
-                       " (the same vertices as an earlier face)");
+            log.record("duplicate_faces_removed", duplicate,
+                       plural(duplicate, "duplicate face", "duplicate faces") + " (the same vertices as an earlier face)",
+                       "removed " + plural(duplicate, "duplicate face", "duplicate faces") +
+                           " (the same vertices as an earlier face)");
         removeBadFaces(work, check);
         if (work.triangles.empty()) throw InvalidInputError("the mesh has no faces with an area");
         check = checkMesh(work);
@@ -358,64 +371,67 @@ PrepareMeshResult prepareMesh(const TriMesh& input, const PrepareMeshOptions& op
     if (check.numNonManifoldEdges > 0) {
         const std::size_t edges = check.numNonManifoldEdges;
         const std::size_t removed = removeNonManifoldFaces(work);
-        change("non_manifold_faces_removed", removed,
-               plural(edges, "non-manifold edge", "non-manifold edges") + " (edges of more than two faces)",
-               "removed the " + plural(removed, "face", "faces") + " around " +
-                   plural(edges, "non-manifold edge", "non-manifold edges") +
-                   " (edges of more than two faces); the hole they leave is treated as any other");
+        log.record("non_manifold_faces_removed", removed,
+                   plural(edges, "non-manifold edge", "non-manifold edges") + " (edges of more than two faces)",
+                   "removed the " + plural(removed, "face", "faces") + " around " +
+                       plural(edges, "non-manifold edge", "non-manifold edges") +
+                       " (edges of more than two faces); the hole they leave is treated as any other");
         if (work.triangles.empty()) throw InvalidInputError("the mesh has no faces left around its non-manifold edges");
     }
+    return check;
+}
 
-    // Only vertices in some face take part, in input order.
-    {
-        std::vector<std::uint32_t> index(n, kNone);
-        for (const Triangle& t : work.triangles)
-            for (std::uint32_t v : t) index[v] = 0;
-        std::uint32_t next = 0;
-        for (std::size_t v = 0; v < n; ++v)
-            if (index[v] == 0) {
-                index[v] = next++;
-                result.mesh.points.push_back(input.points[v]);
-            }
-        result.mesh.triangles.resize(work.triangles.size());
-        for (std::size_t f = 0; f < work.triangles.size(); ++f)
-            for (int k = 0; k < 3; ++k) result.mesh.triangles[f][std::size_t(k)] = index[work.triangles[f][std::size_t(k)]];
-        result.preparedOf.resize(n);
-        for (std::size_t v = 0; v < n; ++v) result.preparedOf[v] = index[rep[v]];
-        result.numIsolatedVertices = std::size_t(std::count(result.preparedOf.begin(), result.preparedOf.end(), kNone));
-    }
-    work = TriMesh();
-    TriMesh& mesh = result.mesh;
+/// The prepared mesh of @p triangles (indices of the input's @p points): only vertices in
+/// some face take part, in input order; fills result.mesh, preparedOf (through @p rep, the
+/// merged vertex of each input vertex) and numIsolatedVertices.
+void keepVerticesInFaces(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles,
+                         const std::vector<std::uint32_t>& rep, PrepareMeshResult& result)
+{
+    const std::size_t n = points.size();
+    std::vector<std::uint32_t> index(n, kNone);
+    for (const Triangle& t : triangles)
+        for (std::uint32_t v : t) index[v] = 0;
+    std::uint32_t next = 0;
+    for (std::size_t v = 0; v < n; ++v)
+        if (index[v] == 0) {
+            index[v] = next++;
+            result.mesh.points.push_back(points[v]);
+        }
+    result.mesh.triangles.resize(triangles.size());
+    for (std::size_t f = 0; f < triangles.size(); ++f)
+        for (int k = 0; k < 3; ++k) result.mesh.triangles[f][std::size_t(k)] = index[triangles[f][std::size_t(k)]];
+    result.preparedOf.resize(n);
+    for (std::size_t v = 0; v < n; ++v) result.preparedOf[v] = index[rep[v]];
+    result.numIsolatedVertices = std::size_t(std::count(result.preparedOf.begin(), result.preparedOf.end(), kNone));
+}
 
-    // 5. One copy of a vertex per fan of faces.
-    if (const std::size_t split = splitNonManifoldVertices(mesh); split > 0)
-        change("non_manifold_vertices_split", split,
-               plural(split, "non-manifold vertex", "non-manifold vertices") + " (separate fans of faces meeting at one point)",
-               "split " + plural(split, "non-manifold vertex", "non-manifold vertices") +
-                   " (where separate fans of faces meet at one point) into one per fan");
-
-    // 6. Orientation. The check of the faces stands for the prepared mesh if nothing
-    // changed it (a clean scan: one check in all).
-    if (!result.changes.empty() || result.numIsolatedVertices > 0) check = checkMesh(mesh);
+/// Step 6: each part oriented coherently, closed parts facing outward. @p check is the
+/// check of @p mesh as it comes, and afterwards as it leaves.
+void orientParts(TriMesh& mesh, MeshCheckResult& check, const RepairLog& log)
+{
     if (check.numInconsistentEdges > 0) {
         const std::size_t turned = orientCoherently(mesh);
-        change("faces_reoriented", turned,
-               plural(check.numInconsistentEdges, "edge", "edges") + " whose two faces disagree in orientation",
-               "re-oriented " + plural(turned, "face", "faces") + " to agree with their neighbours");
+        log.record("faces_reoriented", turned,
+                   plural(check.numInconsistentEdges, "edge", "edges") + " whose two faces disagree in orientation",
+                   "re-oriented " + plural(turned, "face", "faces") + " to agree with their neighbours");
         check = checkMesh(mesh);
     }
-    {
-        std::size_t facesTurned = 0;
-        if (const std::size_t parts = turnClosedPartsOutward(mesh, check, facesTurned); parts > 0) {
-            change("closed_parts_turned_outward", parts,
+    std::size_t facesTurned = 0;
+    if (const std::size_t parts = turnClosedPartsOutward(mesh, check, facesTurned); parts > 0) {
+        log.record("closed_parts_turned_outward", parts,
                    plural(parts, "closed part", "closed parts") + " facing inward (negative volume)",
                    "turned " + plural(parts, "closed part", "closed parts") + " (" +
                        plural(facesTurned, "face", "faces") + ") that faced inward, so that they face outward");
-            check = checkMesh(mesh);
-        }
+        check = checkMesh(mesh);
     }
+}
 
-    // 7. Holes, for the computation only.
+/// Step 7: holes filled for the computation only (result.holes, firstFillTriangle, the
+/// changes), and the share of fill near each vertex (filledShare) when a radius is given.
+void fillHolesForComputation(const MeshCheckResult& check, const PrepareMeshOptions& options,
+                             PrepareMeshResult& result)
+{
+    TriMesh& mesh = result.mesh;
     result.firstFillTriangle = mesh.numTriangles();
     if (options.maxHolePerimeter > 0 && !check.closed) {
         FillHolesOptions fo;
@@ -441,6 +457,41 @@ PrepareMeshResult prepareMesh(const TriMesh& input, const PrepareMeshOptions& op
     if (options.radius > 0)
         result.filledShare = result.holes.numFilled > 0 ? filledShareOf(mesh, result.firstFillTriangle, options.radius)
                                                         : std::vector<float>(mesh.numVertices(), 0.0f);
+}
+
+} // namespace
+
+double defaultMaxHolePerimeter(double radius) { return M_PI * radius; }
+
+PrepareMeshResult prepareMesh(const TriMesh& input, const PrepareMeshOptions& options)
+{
+    refuseUnrepairable(input);
+    PrepareMeshResult result;
+    const RepairLog log(options.repair, result.changes);
+
+    TriMesh work;
+    work.points = input.points;
+    work.triangles = input.triangles;
+    const std::vector<std::uint32_t> rep = mergeSamePositions(input.points, work.triangles, log);
+    MeshCheckResult check = removeFacesWithoutSurface(work, log);
+    keepVerticesInFaces(input.points, work.triangles, rep, result);
+    work = TriMesh();
+    TriMesh& mesh = result.mesh;
+
+    // 5. One copy of a vertex per fan of faces.
+    if (const std::size_t split = splitNonManifoldVertices(mesh); split > 0)
+        log.record("non_manifold_vertices_split", split,
+                   plural(split, "non-manifold vertex", "non-manifold vertices") +
+                       " (separate fans of faces meeting at one point)",
+                   "split " + plural(split, "non-manifold vertex", "non-manifold vertices") +
+                       " (where separate fans of faces meet at one point) into one per fan");
+
+    // 6. The check of the faces stands for the prepared mesh if nothing changed it (a clean
+    // scan: one check in all).
+    if (!result.changes.empty() || result.numIsolatedVertices > 0) check = checkMesh(mesh);
+    orientParts(mesh, check, log);
+
+    fillHolesForComputation(check, options, result);
     if (result.numIsolatedVertices > 0)
         result.changes.push_back({"isolated_vertices", result.numIsolatedVertices, {},
                                   plural(result.numIsolatedVertices, "vertex belongs", "vertices belong") +
