@@ -182,7 +182,12 @@ struct Settings {
     std::string markdown;
 
     /// Whether the invariant with letter @p c is computed.
-    bool has(char c) const { return invariants.find(c) != std::string::npos; }
+    /// Whether --invariants (read as msii compute reads it) selects the invariant of letter @p c.
+    bool has(char c) const
+    {
+        const std::vector<Invariant> list = parseInvariantList(invariants);
+        return std::find(list.begin(), list.end(), *invariantOfLetter(c)) != list.end();
+    }
 };
 
 void addOptions(CLI::App& app, Settings& s)
@@ -370,10 +375,7 @@ ComputeOptions computeOptions(const Settings& s)
     o.minVoxelsPerRadius = s.precision;
     o.patchLinePrecision = s.plPrecision;
     o.voxelSize = s.voxel;
-    o.computeVolume = s.has('V');
-    o.computeSphere = s.has('S');
-    o.computePatch = s.has('P');
-    o.computeLine = s.has('L');
+    o.select(parseInvariantList(s.invariants));
     ComputeOptions co;
     co.invariants = o;
     return co;
