@@ -9,6 +9,7 @@
 /// memory is its own, and prints their time, memory and time per vertex against the above.
 /// It also times the exact mode (--exact): on a block of the tablet's vertices, and on every
 /// vertex of a closed slab whose walls and bottom are a few long triangles.
+#include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
 #include <msii/core/version.h>
 #include <msii/io/atomic_file.h>
@@ -902,6 +903,12 @@ int main(int argc, char** argv)
     Settings settings;
     addOptions(app, settings);
     CLI11_PARSE(app, argc, argv);
+    try {
+        parseInvariantList(settings.invariants);
+    } catch (const InvalidInputError& e) {
+        std::fprintf(stderr, "msii-benchmark: error: --invariants: %s\n", e.what());
+        return 2;
+    }
     const std::string command = commandLine(argc, argv, settings.markdown);
     Report report;
 
