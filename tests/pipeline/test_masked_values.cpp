@@ -45,6 +45,7 @@ TEST(MaskedValues, CountsTheFirstInvariantOverTheRowsGiven)
     MaskedValues some;
     some.add(f, {0, 2});
     some.add(f, {3});
+    some.add(f, {});  // no rows (a DEM window with no own cell in a face): nothing counted
     EXPECT_EQ(some.vertices, 3u);
     EXPECT_EQ(some.perRadius, (std::vector<std::size_t>{1, 2}));
     f[Invariant::Volume] = {{0.5f, 0.5f, 0.5f, 0.5f}, {0.5f, 0.5f, 0.5f, nan}};  // V whenever computed

@@ -191,8 +191,21 @@ void computeFastValues(const TriMesh& mesh, const InvariantsOptions& options, co
     }
 }
 
+/// The values of @p result on the mesh in the local frame: the border distances, then the
+/// exact or the fast mode.
 void computeLocalValues(const TriMesh& mesh, const InvariantsOptions& options, InvariantsResult& result,
-                        RunContext* context);
+                        RunContext* context)
+{
+    // Values are masked where their reach meets a border; distances are searched a little
+    // beyond it (docs/method.md, Borders).
+    std::vector<double> border;
+    if (!result.check.closed)
+        border = borderDistance(mesh, result.check.borderEdges, result.plan.reach + 2.0 * result.plan.voxelSize);
+    if (options.exact)
+        computeExactValues(mesh, options, border, result, context);
+    else
+        computeFastValues(mesh, options, border, result, context);
+}
 
 /// The values of @p result (checked, with its plan) on one piece of mesh.
 void computeValues(const TriMesh& mesh, const InvariantsOptions& options, InvariantsResult& result,
@@ -211,21 +224,6 @@ void computeValues(const TriMesh& mesh, const InvariantsOptions& options, Invari
         computeLocalValues(mesh, options, result, context);
     }
     result.cost.total = result.cost.check + total.seconds();
-}
-
-/// computeValues on the mesh in the local frame.
-void computeLocalValues(const TriMesh& mesh, const InvariantsOptions& options, InvariantsResult& result,
-                        RunContext* context)
-{
-    // Values are masked where their reach meets a border; distances are searched a little
-    // beyond it (docs/method.md, Borders).
-    std::vector<double> border;
-    if (!result.check.closed)
-        border = borderDistance(mesh, result.check.borderEdges, result.plan.reach + 2.0 * result.plan.voxelSize);
-    if (options.exact)
-        computeExactValues(mesh, options, border, result, context);
-    else
-        computeFastValues(mesh, options, border, result, context);
 }
 
 } // namespace

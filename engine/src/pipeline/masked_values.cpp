@@ -6,23 +6,35 @@
 
 namespace msii {
 
-void MaskedValues::add(const FeatureSet& features, const std::vector<std::uint32_t>& rows)
+namespace {
+
+/// The columns counted: the first invariant present's (none if nothing was computed).
+const FeatureColumns* countedColumns(const FeatureSet& features)
 {
     const std::vector<Invariant> present = features.invariants();
-    if (present.empty()) return;
-    const FeatureColumns& columns = features[present.front()];
-    perRadius.resize(columns.size(), 0);
-    const std::size_t count = rows.empty() ? features.numVertices() : rows.size();
-    for (std::size_t j = 0; j < columns.size(); ++j) {
-        const std::vector<float>& column = columns[j];
-        std::size_t masked = 0;
-        if (rows.empty())
-            for (float v : column) masked += std::isnan(v);
-        else
-            for (std::uint32_t i : rows) masked += std::isnan(column[i]);
-        perRadius[j] += masked;
-    }
-    vertices += count;
+    return present.empty() ? nullptr : &features[present.front()];
+}
+
+} // namespace
+
+void MaskedValues::add(const FeatureSet& features)
+{
+    const FeatureColumns* columns = countedColumns(features);
+    if (!columns) return;
+    perRadius.resize(columns->size(), 0);
+    for (std::size_t j = 0; j < columns->size(); ++j)
+        for (float v : (*columns)[j]) perRadius[j] += std::isnan(v);
+    vertices += features.numVertices();
+}
+
+void MaskedValues::add(const FeatureSet& features, const std::vector<std::uint32_t>& rows)
+{
+    const FeatureColumns* columns = countedColumns(features);
+    if (!columns) return;
+    perRadius.resize(columns->size(), 0);
+    for (std::size_t j = 0; j < columns->size(); ++j)
+        for (std::uint32_t i : rows) perRadius[j] += std::isnan((*columns)[j][i]);
+    vertices += rows.size();
 }
 
 std::size_t MaskedValues::total() const

@@ -261,9 +261,10 @@ void checkOptions(const DemComputeOptions& options)
     if (c.tiling.memoryBudget < 0 || !std::isfinite(c.tiling.memoryBudget))
         throw InvalidInputError("the memory budget must be positive (or 0: the default)");
     if (options.windowCells < 0) throw InvalidInputError("the window size must be positive (or 0: from the memory budget)");
-    std::string names;
-    for (const std::string& b : options.bands) names += b + ",";
-    if (!options.bands.empty()) parseFeatureNames(names, demBandNames(c));  // names one that cannot be given
+    const std::vector<std::string> available = demBandNames(c);
+    for (const std::string& name : options.bands)
+        if (std::find(available.begin(), available.end(), name) == available.end())
+            parseFeatureNames(name, available);  // throws, naming it and those that can be given
 }
 
 } // namespace

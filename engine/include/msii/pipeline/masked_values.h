@@ -21,9 +21,11 @@ struct MaskedValues {
     std::vector<std::size_t> perRadius;  ///< vertices whose value is NaN, per radius
     std::size_t vertices = 0;            ///< vertices counted
 
-    /// Counts the rows @p rows of @p features (all rows if empty: use for vertices that are
-    /// in a face; a vertex in no face has no values and is not counted).
-    void add(const FeatureSet& features, const std::vector<std::uint32_t>& rows = {});
+    /// Counts every row of @p features (pass only vertices that are in a face: a vertex in no
+    /// face has no values and is not counted).
+    void add(const FeatureSet& features);
+    /// Counts the rows @p rows of @p features (none if empty).
+    void add(const FeatureSet& features, const std::vector<std::uint32_t>& rows);
     /// vertex·radius pairs masked, all radii.
     std::size_t total() const;
     /// The "mostly_masked" diagnostic when more than half of the vertices are masked at the
