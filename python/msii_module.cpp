@@ -119,7 +119,7 @@ py::object featureArray(std::vector<std::vector<float>>& columns)
 
 py::object computeArrays(const py::array& vertices, const py::array& faces, double radius, int scales,
                  const std::string& invariants, bool exact, int threads, const py::object& progress,
-                 double memoryBudget, int tiles)
+                 double memoryBudget, int tiles, const std::string& border)
 {
     const TriMesh mesh = meshOf(vertices, faces);
     if (!(radius > 0) || !std::isfinite(radius)) throw py::value_error("radius must be a positive number.");
@@ -132,6 +132,7 @@ py::object computeArrays(const py::array& vertices, const py::array& faces, doub
     o.invariants.exact = exact;
     o.tiling.memoryBudget = memoryBudget;
     o.tiling.tilesPerAxis = tiles;
+    o.border = parseBorderHandling(border);
     const bool follow = !progress.is_none();
     if (follow && !PyCallable_Check(progress.ptr()))
         throw py::value_error("progress must be a callable (stage, done, total) or None.");
@@ -176,6 +177,8 @@ py::object computeArrays(const py::array& vertices, const py::array& faces, doub
     out["sample_levels"] = plan.patchLineLevels;
     out["reach"] = plan.reach;
     out["exact"] = exact;
+    out["border"] = border;
+    out["filled_share"] = py::array_t<float>(py::ssize_t(result.filledShare.size()), result.filledShare.data());
     // Diagnostics as objects (core/diagnostics.h): kind (e.g. "duplicate_faces_removed",
     // "holes_filled", "mostly_masked"), count (of faces, holes, vertices ...; 0 if nothing),
     // figures (a dict of further numbers) and message.
@@ -419,12 +422,17 @@ PYBIND11_MODULE(msii, m)
     m.def("compute", &computeArrays, py::arg("vertices"), py::arg("faces"), py::arg("radius"), py::arg("scales") = 16,
           py::arg("invariants") = "VSPL", py::arg("exact") = false, py::arg("threads") = 0,
           py::arg("progress") = py::none(), py::arg("memory_budget") = 0.0, py::arg("tiles") = 0,
+          py::arg("border") = "continue",
           "The integral invariants at N = scales radii r_j = j*radius/N for every vertex, as msii compute "
           "computes them (mesh preparation included; the same values bit for bit). Returns an object with V, S, P, L "
-          "(float32 (n_vertices, N), NaN where the ball reaches an open border, None if not asked), radii, "
+          "(float32 (n_vertices, N), None if not asked), filled_share (float32 (n_vertices,): how much of each "
+          "vertex's largest ball rests on surface not in the input, filled holes and the continuation past borders, "
+          "as a share of pi R^2), radii, "
           "voxel_size, levels (grid level per radius), exact, warnings (what preparation repaired or filled and the "
           "computation's remarks, each with kind, count and message). progress(stage, done, total) is called about 10 times per second; Ctrl-C cancels "
           "(KeyboardInterrupt). memory_budget (bytes) or tiles (per axis) compute in tiles, with the same values. "
+          "border='continue' (default) continues an open surface past its borders so that every vertex gets values; "
+          "border='mask' gives NaN where a ball reaches a border instead. "
           "The GIL is released while computing.");
     m.def("metric", &metric, py::arg("result"), py::arg("metric") = "mahalanobis", py::arg("reference") = "flat",
           py::arg("p") = 2.0, py::arg("invariants") = "",

@@ -67,7 +67,17 @@ def test_compute_equals_the_cli_bit_for_bit(tablet, tmp_path):
             assert same.all(), "%s_%02d differs at %d vertices" % (letter, j + 1, (~same).sum())
             compared += np.count_nonzero(~np.isnan(column))
     assert compared > 100000
-    assert np.isnan(r.V).any() and not np.isnan(r.V).all()  # open border: masked values
+    assert not np.isnan(r.V).any()  # the open border is continued: values everywhere
+    assert r.border == "continue" and r.filled_share.shape == (len(cli),)
+    assert (r.filled_share > 0).any() and (r.filled_share == 0).any()
+    column = cli["filled_share"]
+    assert np.array_equal(r.filled_share, column)
+    masked = msii.compute(vertices, faces, 0.8, border="mask")
+    assert np.isnan(masked.V).any() and not np.isnan(masked.V).all()  # NaN where a ball reaches the border
+    whole = ~np.isnan(masked.V).any(axis=1)
+    assert np.array_equal(masked.V[whole], r.V[whole])  # balls clear of the border: the same, bit for bit
+    with pytest.raises(msii.InvalidInputError, match="continue"):
+        msii.compute(vertices, faces, 0.8, border="clip")
     assert r.voxel_size > 0 and len(r.levels) == 16
 
 
@@ -272,7 +282,7 @@ def test_warnings_carry_codes_and_figures(tmp_path):
     subprocess.run([SAMPLES, "tablet", "--width", "3", "--height", "2", "--spacing", "0.1", "-q", "-o", str(scan)],
                    check=True)
     vertices, faces = msii.read_mesh(str(scan))
-    r = msii.compute(vertices, faces, 1.5, scales=4, invariants="V")
+    r = msii.compute(vertices, faces, 1.5, scales=4, invariants="V", border="mask")
     masked = [w for w in r.warnings if w.kind == "mostly_masked"]
     assert len(masked) == 1, [w.kind for w in r.warnings]
     w = masked[0]

@@ -110,6 +110,7 @@ TEST(Compute, GeoreferencedCoordinatesComputeAsAtTheOrigin)
     ComputeOptions tiled;  // through the pipeline, which computes in tiles
     tiled.invariants = o;
     tiled.tiling.tilesPerAxis = 3;
+    tiled.border = BorderHandling::Mask;  // as computeInvariants
     InvariantsResult parts;
     parts.plan = b.plan;
     parts.features = compute(moved(local, utm), tiled).features;

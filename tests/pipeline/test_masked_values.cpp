@@ -37,20 +37,23 @@ TEST(MaskedValues, CountsTheFirstInvariantOverTheRowsGiven)
     f.radii = {1, 2};
     f[Invariant::Sphere] = {{0.5f, nan, 0.5f, nan}, {nan, nan, 0.5f, nan}};
     f[Invariant::Line] = {{nan, nan, nan, nan}, {nan, nan, nan, nan}};  // not the first: not counted
+    const std::vector<float> share{0.0f, 0.25f, 0.0f, 1.0f};
     MaskedValues all;
-    all.add(f);
+    all.add(f, share);
+    EXPECT_EQ(all.withFilledShare, 2u);
     EXPECT_EQ(all.vertices, 4u);
     EXPECT_EQ(all.perRadius, (std::vector<std::size_t>{2, 3}));
     EXPECT_EQ(all.total(), 5u);
     MaskedValues some;
-    some.add(f, {0, 2});
-    some.add(f, {3});
-    some.add(f, {});  // no rows (a DEM window with no own cell in a face): nothing counted
+    some.add(f, share, {0, 2});
+    some.add(f, share, {3});
+    some.add(f, share, {});  // no rows (a DEM window with no own cell in a face): nothing counted
     EXPECT_EQ(some.vertices, 3u);
+    EXPECT_EQ(some.withFilledShare, 1u);
     EXPECT_EQ(some.perRadius, (std::vector<std::size_t>{1, 2}));
     f[Invariant::Volume] = {{0.5f, 0.5f, 0.5f, 0.5f}, {0.5f, 0.5f, 0.5f, nan}};  // V whenever computed
     MaskedValues withV;
-    withV.add(f);
+    withV.add(f, share);
     EXPECT_EQ(withV.perRadius, (std::vector<std::size_t>{0, 1}));
 }
 
@@ -88,6 +91,7 @@ TEST(MaskedValues, PipelineWarnsOnAMostlyMaskedPatch)
         ComputeOptions o;
         o.invariants.radius = radius;
         o.invariants.computePatch = o.invariants.computeLine = false;
+        o.border = BorderHandling::Mask;  // the masking this warning is about
         const ComputeResult res = compute(mesh, o);
         const auto share = [&](std::size_t j) {
             const auto& column = res.features[Invariant::Volume][j];

@@ -109,7 +109,8 @@ std::map<std::string, std::vector<float>> propertiesOf(const fs::path& ply)
 TEST(MsiiCli, ComputeWritesFeaturesAndSidecar)
 {
     const fs::path out = tempDir() / "good.ply";
-    const RunResult r = runMsii("compute '" + smallPatch() + "' --radius 0.8 --scales 4 --quiet --overwrite --output '" + out.string() + "'");
+    // --border mask: NaN where a ball reaches the patch's border, and quality's fallback.
+    const RunResult r = runMsii("compute '" + smallPatch() + "' --radius 0.8 --scales 4 --border mask --quiet --overwrite --output '" + out.string() + "'");
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_TRUE(r.err.empty()) << r.err;  // --quiet
     ReadMeshOptions ro;
@@ -150,6 +151,25 @@ TEST(MsiiCli, ComputeWritesFeaturesAndSidecar)
     EXPECT_EQ(checked, res.mesh.numVertices());
     EXPECT_GT(partial, 0u);  // the rule was exercised: border vertices with some radii
     EXPECT_GT(none, 0u);
+    {  // by default the border is continued: every value is there, and the record counts the
+       // vertices whose ball rests partly on the continuation
+        const fs::path cont = tempDir() / "continued.ply";
+        const RunResult rc = runMsii("compute '" + smallPatch() + "' --radius 0.8 --scales 4 --quiet --overwrite --output '" + cont.string() + "'");
+        ASSERT_EQ(rc.code, 0) << rc.err;
+        const ReadMeshResult c = readMesh(cont.string(), ro);
+        std::size_t nan = 0, withShare = 0;
+        for (std::size_t k = 0; k < 16; ++k)
+            for (float v : c.vertexProperties[k].values) nan += std::isnan(v);
+        for (float s : c.vertexProperties[18].values) withShare += s > 0;
+        EXPECT_EQ(nan, 0u);
+        EXPECT_GT(withShare, 0u);
+        const std::string cjson = readFile((tempDir() / "continued.json").string());
+        EXPECT_NE(cjson.find("\"vertices_with_filled_share\": " + std::to_string(withShare)), std::string::npos) << cjson;
+        EXPECT_NE(cjson.find("\"border\": \"continue\""), std::string::npos);
+        const RunResult bad = runMsii("compute '" + smallPatch() + "' --radius 0.8 --border clip --quiet --overwrite --output '" + cont.string() + "'");
+        EXPECT_EQ(bad.code, 2) << bad.err;
+        EXPECT_NE(bad.err.find("--border"), std::string::npos) << bad.err;
+    }
     const std::string json = readFile((tempDir() / "good.json").string());
     for (const char* key : {"\"radii\"", "\"voxel_size\"", "\"timings_seconds\"", "\"version\"", "\"median\""})
         EXPECT_NE(json.find(key), std::string::npos) << key;
@@ -277,7 +297,7 @@ TEST(MsiiCli, MetricAndSmoothAfterCompute)
     fs::create_directories(dir);
     const fs::path features = dir / "patch.msii.ply";
     const RunResult rc = runMsii("compute '" + smallPatch() + "' --radius 0.8 --scales 4 --invariants V,P "
-                                 "--gigamesh --quiet --output '" + features.string() + "'");
+                                 "--border mask --gigamesh --quiet --output '" + features.string() + "'");
     ASSERT_EQ(rc.code, 0) << rc.err;
     const auto in = propertiesOf(features);
     const std::size_t nv = in.at("V_01").size();

@@ -30,6 +30,7 @@ struct ComputeArgs : CommonArgs {
     std::string units;           // --units: the mesh's units, recorded for pictures (empty: unstated)
     bool repair = false, strict = false, noSphere = false;
     double fillHoles = -1;      // longest hole border filled; -1 = pi R (default), 0 = none
+    std::string border = "continue";  // --border: continue (default) or mask
     std::string invariants = "V,S,P,L";
     bool exact = false;
     std::string vertices;       // exact mode: comma-separated indices

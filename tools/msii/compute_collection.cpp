@@ -173,7 +173,8 @@ int computeCollection(const ComputeArgs& args, const std::vector<std::string>& i
                                        {"voxel_size", args.voxelSize},
                                        {"invariants", args.invariants}, {"exact", args.exact},
                                        {"strict", args.strict},
-                                       {"fill_holes", args.fillHoles}};
+                                       {"fill_holes", args.fillHoles},
+                                       {"border", args.border}};
     std::size_t done = 0, skipped = 0;
     std::vector<std::string> failed;
     const bool terminal = !args.quiet && stderrIsTerminal();

@@ -71,6 +71,7 @@ ComputeOptions computeOptionsOf(const ComputeArgs& args)
     inv.exact = args.exact;
     o.repair = !args.strict;
     o.maxHolePerimeter = args.fillHoles;
+    o.border = parseBorderHandling(args.border);
     o.tiling.memoryBudget = parseBytes(args.memoryBudget);
     if (!args.exact) {  // the exact mode is computed whole (at chosen vertices)
         o.tiling.tilesPerAxis = args.tiles;
@@ -307,7 +308,9 @@ std::string sidecarPathFor(const std::string& plyPath)
 
 std::string worded(const Diagnostic& d)
 {
-    if (d.kind == "mostly_masked") return d.message + " (--radius; --fill-holes fills larger holes)";
+    if (d.kind == "mostly_masked")
+        return d.message + " (--radius; --fill-holes fills larger holes; --border continue gives values everywhere)";
+    if (d.kind == "borders_continued") return d.message + " (--border mask gives NaN there instead)";
     if (d.kind == "smallest_radius_below_edge") return d.message + " (raise --radius or lower --scales)";
     if (d.kind == "holes_filled") return d.message + " (--fill-holes sets the largest hole filled; 0 fills none)";
     return d.message;
@@ -456,6 +459,13 @@ std::function<int()> addComputeCommand(CLI::App& app)
         ->type_name("SIZE")
         ->check(numberCheck([](double v) { return v >= 0 && std::isfinite(v); },
                             "the hole size must be 0 (fill none) or a positive length"));
+    cmd->add_option("--border", args->border,
+                    "Where a ball reaches a border of an open surface (a scan's rim, a DEM's edge, a gap too large "
+                    "to fill): continue (default) continues the surface past it, so every vertex and cell gets "
+                    "values, and filled_share says how much of the ball rests on the continuation; mask gives NaN "
+                    "there")
+        ->type_name("continue|mask")
+        ->check(CLI::IsMember({"continue", "mask"}));
     cmd->add_option("--invariants", args->invariants,
                     "Which invariants: letters of V, S, P and L, together or comma-separated (default V,S,P,L; "
                     "VS and v,s are alike)");

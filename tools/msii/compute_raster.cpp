@@ -90,7 +90,9 @@ OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, co
                                 {"cells", result.windowCells}, {"halo_cells", result.haloCells},
                                 {"narrow_halo_cells", result.narrowHaloCells},
                                 {"windows_with_wide_halo", result.wideHaloWindows}}}};
-    j["mesh"] = {{"triangles", result.triangles}, {"masked_values", result.masked.total()}};
+    j["mesh"] = {{"triangles", result.triangles},
+                 {"masked_values", result.masked.total()},
+                 {"cells_with_filled_share", result.masked.withFilledShare}};
     addDiagnostics(j, result.diagnostics);
     if (const double peak = peakMemoryBytes(); peak > 0) j["peak_memory_bytes"] = peak;
     const InvariantsCost& t = result.cost;

@@ -54,6 +54,7 @@ nlohmann::json parametersRecord(const ComputeArgs& args, const ScalePlan& plan, 
             {"mode", args.exact ? "exact" : "fast"},
             {"repair", !args.strict},
             {"max_hole_perimeter", maxHolePerimeter},
+            {"border", args.border},
             {"threads", args.threads},
             {"units", args.units}};
 }
@@ -70,8 +71,13 @@ nlohmann::json conventions(const ComputeArgs& args, const std::vector<Invariant>
     j["quality"] = quality + " (the first of V, S, P, L computed) at the largest radius with a value; "
                              "a plane's value (V, S 0.5; P, L 1) where none has one; never NaN";
     j["valid_radii"] = "how many radii have a value of the quality's invariant (0 to N)";
-    j["masked"] = args.exact ? "NaN where the ball reaches a mesh border, and at vertices not computed"
-                             : "NaN where the ball of that radius reaches a mesh border";
+    if (args.border == "mask")
+        j["masked"] = args.exact ? "NaN where the ball reaches a mesh border, and at vertices not computed"
+                                 : "NaN where the ball of that radius reaches a mesh border";
+    else
+        j["masked"] = args.exact ? "NaN at vertices not computed" : "none: the surface is continued past its borders";
+    j["filled_share"] = "share of the largest ball's surface not in the input (filled holes and the continuation "
+                        "past borders), area / (pi R^2), at most 1";
     return j;
 }
 
@@ -97,7 +103,8 @@ nlohmann::json meshRecord(const MeshRunRecord& r)
             {"diagonal", st.diagonal},
             {"edge_length", {{"min", st.minEdge}, {"median", st.medianEdge}, {"mean", st.meanEdge}, {"max", st.maxEdge}}},
             {"area", st.area},
-            {"masked_values", result.masked.total()}};
+            {"masked_values", result.masked.total()},
+            {"vertices_with_filled_share", result.masked.withFilledShare}};
 }
 
 /// The record's `preparation`: what was repaired and filled.
@@ -113,6 +120,10 @@ nlohmann::json preparationRecord(const PreparationSummary& p)
                        {"left_open_outer_border", p.holes.numOuterBorders},
                        {"not_filled_failed", p.holes.numFailed},
                        {"max_perimeter", p.maxHolePerimeter}}},
+            {"borders_continued", {{"borders", p.borders.numChains},
+                                   {"border_vertices", p.borders.numBorderVertices},
+                                   {"columns_trimmed", p.borders.numTrimmed},
+                                   {"area_added", p.borders.areaAdded}}},
             {"isolated_vertices", p.isolatedVertices},
             {"prepared_vertices", p.vertices},
             {"prepared_faces", p.faces}};

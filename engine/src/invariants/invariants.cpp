@@ -71,6 +71,10 @@ InvariantsResult checkComputation(const TriMesh& mesh, const InvariantsOptions& 
 InvariantsResult planInvariants(const TriMesh& mesh, const InvariantsOptions& options)
 {
     InvariantsResult result = checkComputation(mesh, options);
+    if (options.plan) {  // a piece of a surface planned whole
+        result.plan = *options.plan;
+        return result;
+    }
     const std::vector<double> radii = equidistantRadii(options.radius, options.scales);
     const double diagonal = result.stats.diagonal;
     if (options.radius > 10.0 * diagonal) {
@@ -199,7 +203,7 @@ void computeLocalValues(const TriMesh& mesh, const InvariantsOptions& options, I
     // Values are masked where their reach meets a border; distances are searched a little
     // beyond it (docs/method.md, Borders).
     std::vector<double> border;
-    if (!result.check.closed)
+    if (!result.check.closed && options.maskBorders)
         border = borderDistance(mesh, result.check.borderEdges, result.plan.reach + 2.0 * result.plan.voxelSize);
     if (options.exact)
         computeExactValues(mesh, options, border, result, context);
@@ -262,13 +266,7 @@ InvariantsCost& InvariantsCost::operator+=(const InvariantsCost& piece)
 
 InvariantsResult computeInvariants(const TriMesh& mesh, const InvariantsOptions& options, RunContext* context)
 {
-    InvariantsResult result;
-    if (options.plan) {  // a piece of a surface planned whole
-        result = checkComputation(mesh, options);
-        result.plan = *options.plan;
-    } else {
-        result = planInvariants(mesh, options);
-    }
+    InvariantsResult result = planInvariants(mesh, options);
     computeValues(mesh, options, result, context);
     return result;
 }

@@ -236,9 +236,11 @@ std::size_t turnClosedPartsOutward(TriMesh& mesh, const MeshCheckResult& check, 
     return turned;
 }
 
-/// filledShare of PrepareMeshResult: the fill triangles cut into pieces much smaller than
-/// R, each piece's area at its centroid, summed over the ball of radius R of each vertex.
-std::vector<float> filledShareOf(const TriMesh& mesh, std::size_t firstFill, double radius)
+} // namespace
+
+/// The fill triangles cut into pieces much smaller than R, each piece's area at its
+/// centroid, summed over the ball of radius R of each vertex.
+std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double radius)
 {
     struct Piece {
         Vec3 at;
@@ -289,6 +291,8 @@ std::vector<float> filledShareOf(const TriMesh& mesh, std::size_t firstFill, dou
     });
     return share;
 }
+
+namespace {
 
 /// The repairs prepareMesh makes, recorded as they are made; with repair off, the first
 /// problem that would need one refuses the mesh instead.
@@ -455,7 +459,7 @@ void fillHolesForComputation(const MeshCheckResult& check, const PrepareMeshOpti
                                           "; values near them stay masked"});
     }
     if (options.radius > 0)
-        result.filledShare = result.holes.numFilled > 0 ? filledShareOf(mesh, result.firstFillTriangle, options.radius)
+        result.filledShare = result.holes.numFilled > 0 ? fillShare(mesh, result.firstFillTriangle, options.radius)
                                                         : std::vector<float>(mesh.numVertices(), 0.0f);
 }
 
@@ -492,6 +496,7 @@ PrepareMeshResult prepareMesh(const TriMesh& input, const PrepareMeshOptions& op
     orientParts(mesh, check, log);
 
     fillHolesForComputation(check, options, result);
+    result.open = !check.closed;  // unless every loop was filled
     if (result.numIsolatedVertices > 0)
         result.changes.push_back({"isolated_vertices", result.numIsolatedVertices, {},
                                   plural(result.numIsolatedVertices, "vertex belongs", "vertices belong") +

@@ -4,7 +4,10 @@
 #include <msii/core/stopwatch.h>
 #include <msii/mesh/prepare_mesh.h>
 
+#include <algorithm>
 #include <limits>
+#include <optional>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -29,8 +32,52 @@ PrepareMeshResult prepare(const TriMesh& input, const ComputeOptions& options, C
     s.vertices = prepared.mesh.numVertices();
     s.faces = prepared.mesh.numTriangles();
     s.seconds = watch.seconds();
-    result.diagnostics = prepared.changes;
+    if (options.border == BorderHandling::Continue)
+        for (Diagnostic& d : s.changes)
+            if (d.kind == "holes_not_filled")
+                d.message = "could not fill " + std::to_string(d.count) + (d.count == 1 ? " hole" : " holes") +
+                            "; the surface is continued past their rims instead (filled_share)";
+    result.diagnostics = s.changes;
     return prepared;
+}
+
+/// Stage 1b (BorderHandling::Continue): the prepared mesh continued past the borders left open,
+/// planned on the surface as prepared (the continuation changes neither the plan nor the
+/// statistics), with the filled share over fill and continuation together. Returns the
+/// planning, whose statistics and check stand for the surface; none if nothing is open.
+std::optional<InvariantsResult> continueBorders(PrepareMeshResult& prepared, const ComputeOptions& options,
+                                                InvariantsOptions& invariants, ComputeResult& result)
+{
+    if (options.border != BorderHandling::Continue || !prepared.open) return std::nullopt;
+    const Stopwatch watch;
+    InvariantsResult planned = planInvariants(prepared.mesh, invariants);
+    ExtendBordersOptions eo;
+    eo.width = haloWidth(planned.plan);
+    eo.fitRadius = continuationFitRadius(planned.plan);
+    eo.step = planned.plan.vertexSpacing > 0 ? planned.plan.vertexSpacing : planned.stats.medianEdge;
+    if (!options.cutVertices.empty()) {
+        eo.onCut.assign(prepared.mesh.numVertices(), 0);
+        for (std::uint32_t v : options.cutVertices)
+            if (v < prepared.preparedOf.size() && prepared.preparedOf[v] != PrepareMeshResult::kNoVertex)
+                eo.onCut[prepared.preparedOf[v]] = 1;
+    }
+    const ExtendBordersResult e = extendBorders(prepared.mesh, eo);
+    result.preparation.borders = e;
+    invariants.plan = planned.plan;
+    invariants.maskBorders = false;
+    result.diagnostics.insert(result.diagnostics.end(), planned.diagnostics.begin(), planned.diagnostics.end());
+    if (e.numChains > 0) {
+        prepared.filledShare = fillShare(prepared.mesh, prepared.firstFillTriangle, invariants.radius);
+        std::ostringstream msg;
+        msg.precision(3);
+        msg << "continued the surface past " << e.numChains << (e.numChains == 1 ? " border" : " borders")
+            << " (outer edges, gaps too large to fill) for the computation, " << eo.width
+            << " wide; values within R of them rest partly on the continuation (filled_share)";
+        result.diagnostics.push_back(
+            {"borders_continued", e.numChains, {{"width", eo.width}, {"area_added", e.areaAdded}}, msg.str()});
+    }
+    result.preparation.seconds += watch.seconds();
+    return planned;
 }
 
 /// The invariants' options on the prepared mesh: the exact mode's vertices renumbered.
@@ -116,7 +163,7 @@ void computeWhole(const PrepareMeshResult& prepared, const InvariantsOptions& op
         piece.vertices = std::move(inFace);
         piece.plan = r.plan;
         for (std::uint32_t v : piece.vertices) piece.filledShare.push_back(prepared.filledShare[prepared.preparedOf[v]]);
-        if (!options.exact) result.masked.add(piece.features);
+        if (!options.exact) result.masked.add(piece.features, piece.filledShare);
         (*sink)(piece);
         return;
     }
@@ -126,7 +173,7 @@ void computeWhole(const PrepareMeshResult& prepared, const InvariantsOptions& op
             std::vector<float>().swap(column);
         }
     result.filledShare = toInputVertices(prepared, prepared.filledShare);
-    if (!options.exact) result.masked.add(result.features, inFace);
+    if (!options.exact) result.masked.add(result.features, result.filledShare, inFace);
 }
 
 /// Stages 2 to 4 in tiles: each tile's values mapped to the input's vertices as it comes.
@@ -144,7 +191,7 @@ void computeTiled(const PrepareMeshResult& prepared, const InvariantsOptions& op
         piece.plan = part.values.plan;
         piece.features = rowsOf(part.values.features, rows);
         for (std::uint32_t row : rows) piece.filledShare.push_back(prepared.filledShare[part.vertices[row]]);
-        result.masked.add(piece.features);
+        result.masked.add(piece.features, piece.filledShare);
         if (sink) (*sink)(piece);
         else scatter(piece, numInputVertices, result);
     };
@@ -157,12 +204,17 @@ ComputeResult run(const TriMesh& input, const ComputeOptions& options, const Pie
     if (options.tiling.tiled() && options.invariants.exact)
         throw InvalidInputError("the exact mode is not tiled (restrict it to chosen vertices instead)");
     ComputeResult result;
-    const PrepareMeshResult prepared = prepare(input, options, result);
-    const InvariantsOptions invariants = onPrepared(options, prepared);
+    PrepareMeshResult prepared = prepare(input, options, result);
+    InvariantsOptions invariants = onPrepared(options, prepared);
+    const std::optional<InvariantsResult> planned = continueBorders(prepared, options, invariants, result);
     if (options.tiling.tiled())
         computeTiled(prepared, invariants, options.tiling, input.numVertices(), sink, result, context);
     else
         computeWhole(prepared, invariants, sink, result, context);
+    if (planned) {  // the surface's, not the continued mesh's
+        result.stats = planned->stats;
+        result.check = planned->check;
+    }
     if (!invariants.exact && !result.check.closed && options.tiling.onlyTile < 0)
         if (std::optional<Diagnostic> d = result.masked.mostlyMasked(result.plan.radii))
             result.diagnostics.push_back(std::move(*d));
@@ -170,6 +222,23 @@ ComputeResult run(const TriMesh& input, const ComputeOptions& options, const Pie
 }
 
 } // namespace
+
+BorderHandling parseBorderHandling(const std::string& name)
+{
+    if (name == "continue") return BorderHandling::Continue;
+    if (name == "mask") return BorderHandling::Mask;
+    throw InvalidInputError("unknown border handling '" + name +
+                            "' (continue: the surface is continued past its borders; mask: NaN where a ball reaches one)");
+}
+
+const char* borderHandlingName(BorderHandling border) { return border == BorderHandling::Mask ? "mask" : "continue"; }
+
+double continuationFitRadius(const ScalePlan& plan)
+{
+    return std::max(0.25 * plan.radii.back(), 3.0 * plan.vertexSpacing);
+}
+
+double continuationReach(const ScalePlan& plan) { return 2.5 * haloWidth(plan) + continuationFitRadius(plan); }
 
 ComputeResult compute(const TriMesh& input, const ComputeOptions& options, RunContext* context)
 {

@@ -17,8 +17,9 @@ const FeatureColumns* countedColumns(const FeatureSet& features)
 
 } // namespace
 
-void MaskedValues::add(const FeatureSet& features)
+void MaskedValues::add(const FeatureSet& features, const std::vector<float>& filledShare)
 {
+    for (float s : filledShare) withFilledShare += s > 0;
     const FeatureColumns* columns = countedColumns(features);
     if (!columns) return;
     perRadius.resize(columns->size(), 0);
@@ -27,8 +28,10 @@ void MaskedValues::add(const FeatureSet& features)
     vertices += features.numVertices();
 }
 
-void MaskedValues::add(const FeatureSet& features, const std::vector<std::uint32_t>& rows)
+void MaskedValues::add(const FeatureSet& features, const std::vector<float>& filledShare,
+                       const std::vector<std::uint32_t>& rows)
 {
+    for (std::uint32_t i : rows) withFilledShare += filledShare[i] > 0;
     const FeatureColumns* columns = countedColumns(features);
     if (!columns) return;
     perRadius.resize(columns->size(), 0);

@@ -137,7 +137,9 @@ WindowLayout layWindows(const DemSource& source, const std::string& input, const
     // The narrow halo holds everything the own cells depend on; the wide one also a hole next
     // to the window's edge that the whole raster would fill (at most half its perimeter across).
     w.narrowHalo = int(std::ceil(haloWidth(plan) / cell)) + 1;
-    w.wideHalo = int(std::ceil((haloWidth(plan) + 0.5 * w.options.maxHolePerimeter) / cell)) + 1;
+    double wide = haloWidth(plan) + 0.5 * w.options.maxHolePerimeter;
+    if (w.options.border == BorderHandling::Continue) wide = std::max(wide, continuationReach(plan));
+    w.wideHalo = int(std::ceil(wide / cell)) + 1;
     w.side = options.windowCells > 0 ? options.windowCells : int(std::floor(std::sqrt(cellsPerWindow))) - 2 * w.wideHalo;
     if (w.side < 16)
         throw InvalidInputError("the memory budget is too small for a window of the raster at this radius (its halo is " +
@@ -161,7 +163,10 @@ struct Window {
 /// Reads window (wx, wy) with the narrow halo, or the wide one if a nodata gap crosses the
 /// narrow one's edge: such a gap would be filled in the whole DEM but is a border in the
 /// window. A gap that crosses has a cell on the narrow window's outermost rows or columns
-/// (those on the DEM's edge excepted: there the whole DEM has the same border).
+/// (those on the DEM's edge excepted: there the whole DEM has the same border). When
+/// borders are continued, any border in the narrow box (a gap, the DEM's edge) takes the
+/// wide one: the continuation the own cells see depends on the raster that far
+/// (continuationReach).
 Window readWindow(const DemSource& source, const WindowLayout& w, int wx, int wy)
 {
     Window win;
@@ -176,7 +181,9 @@ Window readWindow(const DemSource& source, const WindowLayout& w, int wx, int wy
     if (w.narrowHalo >= w.wideHalo) return win;
     const int bw = win.box[2] - win.box[0], bh = win.box[3] - win.box[1];
     const auto gap = [&](int x, int y) { return std::isnan(win.dem.heights[std::size_t(y) * std::size_t(bw) + std::size_t(x)]); };
-    bool crossed = false;
+    bool crossed = w.options.border == BorderHandling::Continue &&
+                   (win.box[0] == 0 || win.box[1] == 0 || win.box[2] == w.width || win.box[3] == w.height ||
+                    win.dem.numValid < std::size_t(bw) * std::size_t(bh));
     for (int x = 0; x < bw && !crossed; ++x)
         crossed = (win.box[1] > 0 && gap(x, 0)) || (win.box[3] < w.height && gap(x, bh - 1));
     for (int y = 0; y < bh && !crossed; ++y)
@@ -212,6 +219,26 @@ std::vector<std::vector<float>> bandsOf(const Window& win, const DemMesh& dm, co
     return cells;
 }
 
+/// The vertices of the cells on the window box's sides that are not the DEM's edge: the
+/// raster goes on past them, so they are no border of the surface.
+std::vector<std::uint32_t> cutVerticesOf(const Window& win, const WindowLayout& w, const DemMesh& dm)
+{
+    std::vector<std::uint32_t> cut;
+    const auto add = [&](int x, int y) {
+        const std::uint32_t v = dm.vertexOfCell[win.boxCell(x, y)];
+        if (v != DemMesh::kNoVertex) cut.push_back(v);
+    };
+    for (int x = win.box[0]; x < win.box[2]; ++x) {
+        if (win.box[1] > 0) add(x, win.box[1]);
+        if (win.box[3] < w.height) add(x, win.box[3] - 1);
+    }
+    for (int y = win.box[1]; y < win.box[3]; ++y) {
+        if (win.box[0] > 0) add(win.box[0], y);
+        if (win.box[2] < w.width) add(win.box[2] - 1, y);
+    }
+    return cut;
+}
+
 /// Computes window @p win; adds its diagnostics, masked own cells and cost to @p result;
 /// returns its bands per cell of its box (NaN throughout for a window without surface).
 std::vector<std::vector<float>> computeWindow(const Window& win, const WindowLayout& w, DiagnosticSum& diagnostics,
@@ -221,7 +248,9 @@ std::vector<std::vector<float>> computeWindow(const Window& win, const WindowLay
     if (dm.mesh.numTriangles() == 0)
         return std::vector<std::vector<float>>(result.bands.size(),
                                                std::vector<float>(dm.vertexOfCell.size(), std::numeric_limits<float>::quiet_NaN()));
-    const ComputeResult r = compute(dm.mesh, w.options, context);
+    ComputeOptions options = w.options;
+    options.cutVertices = cutVerticesOf(win, w, dm);
+    const ComputeResult r = compute(dm.mesh, options, context);
     if (w.oneWindow) result.plan = r.plan;
     for (const Diagnostic& d : r.diagnostics)
         if (d.kind != "mostly_masked") diagnostics.add(d);  // counted below over the own cells
@@ -235,7 +264,7 @@ std::vector<std::vector<float>> computeWindow(const Window& win, const WindowLay
             const std::uint32_t v = dm.vertexOfCell[win.boxCell(x, y)];
             if (v != DemMesh::kNoVertex && !std::isnan(r.filledShare[v])) own.push_back(v);
         }
-    result.masked.add(r.features, own);
+    result.masked.add(r.features, r.filledShare, own);
     return bandsOf(win, dm, r, result.bands);
 }
 

@@ -45,6 +45,10 @@ struct InvariantsOptions {
     /// apart (tiles, DEM windows): with it every piece's values are those of one piece, bit
     /// for bit. Unset: planned on this mesh (voxelSize, precisions and radius as above).
     std::optional<ScalePlan> plan;
+    /// Mask (NaN) the values whose ball reaches a border of an open mesh (docs/method.md,
+    /// Border masks). Off for a mesh continued past its borders (mesh/extend_borders.h),
+    /// whose few borders left (where skirts meet) are taken as the surface.
+    bool maskBorders = true;
 
     /// Selects the invariants of @p list (and no others).
     void select(const std::vector<Invariant>& list);

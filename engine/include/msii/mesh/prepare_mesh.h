@@ -53,6 +53,9 @@ struct PrepareMeshResult {
     /// filled. Empty if no radius was given.
     std::vector<float> filledShare;
     FillHolesResult holes;
+    /// The mesh had borders before hole filling (some may be left: an open surface's, holes
+    /// too large or that could not be filled).
+    bool open = false;
     std::vector<Diagnostic> changes;      ///< one per kind of change made (core/diagnostics.h)
     std::size_t numIsolatedVertices = 0;  ///< input vertices in no face
 };
@@ -61,6 +64,10 @@ struct PrepareMeshResult {
 /// @throw InvalidInputError for input that cannot be repaired, and with options.repair
 ///        false for input that would need repair; one sentence each.
 PrepareMeshResult prepareMesh(const TriMesh& input, const PrepareMeshOptions& options = {});
+
+/// Per vertex of @p mesh: the area of triangles firstFill ... inside the ball of radius
+/// @p radius, divided by πR² (the area a flat disc has there), at most 1 (filledShare).
+std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double radius);
 
 /// The default hole size for a largest radius R: loops of at most πR, the perimeter of a
 /// disc of diameter R, i.e. holes that fit well inside the largest ball (docs/method.md,

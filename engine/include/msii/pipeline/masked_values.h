@@ -2,8 +2,9 @@
 /// @file masked_values.h
 /// @brief The last stage of the pipeline: counting the values masked (NaN) because their ball
 /// reaches a border of an open surface, over the input's vertices, and the warning when most
-/// of them are masked at the largest radius. The same count for one piece, tiles and DEM
-/// windows (whose own cells are counted, not their halos).
+/// of them are masked at the largest radius; and the vertices whose ball rests partly on
+/// surface that is not in the input (filled holes, the continuation past borders). The same
+/// counts for one piece, tiles and DEM windows (whose own cells are counted, not their halos).
 
 #include <msii/core/diagnostics.h>
 #include <msii/core/feature_set.h>
@@ -20,12 +21,14 @@ namespace msii {
 struct MaskedValues {
     std::vector<std::size_t> perRadius;  ///< vertices whose value is NaN, per radius
     std::size_t vertices = 0;            ///< vertices counted
+    /// Vertices with a filled share above 0 (ComputeResult::filledShare).
+    std::size_t withFilledShare = 0;
 
-    /// Counts every row of @p features (pass only vertices that are in a face: a vertex in no
-    /// face has no values and is not counted).
-    void add(const FeatureSet& features);
-    /// Counts the rows @p rows of @p features (none if empty).
-    void add(const FeatureSet& features, const std::vector<std::uint32_t>& rows);
+    /// Counts every row of @p features and @p filledShare (pass only vertices that are in a
+    /// face: a vertex in no face has no values and is not counted).
+    void add(const FeatureSet& features, const std::vector<float>& filledShare);
+    /// Counts the rows @p rows of @p features and @p filledShare (none if empty).
+    void add(const FeatureSet& features, const std::vector<float>& filledShare, const std::vector<std::uint32_t>& rows);
     /// vertex·radius pairs masked, all radii.
     std::size_t total() const;
     /// The "mostly_masked" diagnostic when more than half of the vertices are masked at the
