@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -17,6 +18,12 @@ namespace msii {
 namespace {
 
 constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+
+/// The share of the mirrored height the continuation takes: halfway between the tangent
+/// plane (which drops the curvature across the border) and the full mirror image (which
+/// also repeats features near the border, a wedge or a ditch, that the surface beyond need
+/// not have). Chosen on the cut test (docs/method.md, Values up to the border).
+constexpr double kMirrorShare = 0.5;
 
 /// Items (faces, edges) binned to cubes of one size, looked up over the 27 cubes around a
 /// point, in a fixed order (so that sums over them do not depend on the mesh's numbering
@@ -149,6 +156,42 @@ Vec3 fittedNormal(const TriMesh& mesh, const CubeBins& faces, const Vec3& p, dou
     return len > 0 && std::isfinite(len) ? sum / len : fallback;
 }
 
+/// Where the line @p from + λ·@p direction meets triangle @p t (Möller–Trumbore), if it does.
+std::optional<double> lineHit(const TriMesh& mesh, const Triangle& t, const Vec3& from, const Vec3& direction)
+{
+    const Vec3 &a = mesh.points[t[0]], &b = mesh.points[t[1]], &c = mesh.points[t[2]];
+    const Vec3 e1 = b - a, e2 = c - a, q = cross(direction, e2);
+    const double det = dot(e1, q);
+    if (!(std::abs(det) > 1e-300)) return std::nullopt;
+    const Vec3 s = from - a;
+    const double u = dot(s, q) / det;
+    if (u < 0 || u > 1) return std::nullopt;
+    const Vec3 r = cross(s, e1);
+    const double v = dot(direction, r) / det;
+    if (v < 0 || u + v > 1) return std::nullopt;
+    return dot(e2, r) / det;
+}
+
+/// The height of the surface above @p at along the unit @p normal: the hit of the line
+/// through @p at nearest to it, within ±@p limit, searched outwards cube by cube.
+std::optional<double> heightAt(const TriMesh& mesh, const CubeBins& faces, double cube, const Vec3& at,
+                               const Vec3& normal, double limit)
+{
+    std::optional<double> best;
+    for (int k = 0; double(k - 1) * cube <= limit; ++k) {
+        for (const double side : {1.0, -1.0}) {
+            if (k == 0 && side < 0) continue;
+            faces.around(at + normal * (side * k * cube), [&](std::uint32_t f) {
+                const std::optional<double> h = lineHit(mesh, mesh.triangles[f], at, normal);
+                if (h && std::abs(*h) <= limit && (!best || std::abs(*h) < std::abs(*best))) best = h;
+            });
+        }
+        // Every hit nearer than (k + 1) cubes lies in the cubes searched so far.
+        if (best && std::abs(*best) <= double(k + 1) * cube) return best;
+    }
+    return best;
+}
+
 /// One column of the skirt: its positions ring by ring, from the border vertex out.
 struct Column {
     std::uint32_t vertex = kNone;  // the border vertex
@@ -185,13 +228,19 @@ Chain chainOf(const TriMesh& mesh, const std::vector<BorderEdge>& edges, std::ve
     return c;
 }
 
-/// The columns of @p chain, one per vertex, grown ring by ring: each step goes along the
-/// outward directions of the border edges, averaged along the chain with triangular weights
-/// over ρ + s/2 (ρ = @p radius, s the ring's distance) and put into the tangent plane fitted
-/// at the border vertex. The average widens outwards, so that columns from a jagged border
-/// run nearly parallel instead of crossing; on a plane every step stays in it.
+/// The columns of @p chain, one per vertex, grown ring by ring. The tangent plane fitted at
+/// the border vertex b carries the column out: each step goes along the outward directions of
+/// the border edges, averaged along the chain with triangular weights over ρ + s/2 (ρ =
+/// @p radius, s the ring's distance) and put into that plane; the average widens outwards, so
+/// that columns from a jagged border run nearly parallel instead of crossing. Off the plane,
+/// the surface's own height above it is mirrored through b: the ring at x = b + s·t (in the
+/// plane) rises by kMirrorShare times the surface's height above the plane at 2b − x, so that
+/// curvature and roughness partly go on past the border; where the mirror point has no
+/// surface under it (within ±s), the last height found holds. On a plane every ring stays in
+/// it.
 std::vector<Column> columnsOf(const TriMesh& mesh, const std::vector<BorderEdge>& edges, const Chain& chain,
-                              const CubeBins& faces, double radius, const std::vector<double>& rings)
+                              const CubeBins& faces, const CubeBins& fineFaces, double cube, double radius,
+                              const std::vector<double>& rings)
 {
     const std::size_t n = chain.vertices.size(), m = chain.edges.size();
     std::vector<Vec3> outward(n, Vec3{0, 0, 0});
@@ -224,6 +273,9 @@ std::vector<Column> columnsOf(const TriMesh& mesh, const std::vector<BorderEdge>
                 near.push_back({(k + s) % n, d});
             }
             col.at.assign(rings.size(), p);
+            const bool mirror = squaredNorm(normal) > 0.5;
+            Vec3 inPlane = p;
+            double height = 0;
             for (std::size_t r = 1; r < rings.size(); ++r) {
                 const double h = radius + 0.5 * rings[r - 1];
                 Vec3 sum{0, 0, 0};
@@ -232,7 +284,12 @@ std::vector<Column> columnsOf(const TriMesh& mesh, const std::vector<BorderEdge>
                 Vec3 t = sum - normal * dot(sum, normal);
                 const double len = norm(t);
                 t = len > 1e-9 * norm(sum) && std::isfinite(len) ? t / len : own;
-                col.at[r] = col.at[r - 1] + t * (rings[r] - rings[r - 1]);
+                inPlane = inPlane + t * (rings[r] - rings[r - 1]);
+                if (mirror)
+                    if (const std::optional<double> found =
+                            heightAt(mesh, fineFaces, cube, p * 2.0 - inPlane, normal, rings[r]))
+                        height = *found;
+                col.at[r] = inPlane + normal * (kMirrorShare * height);
             }
         }
     });
@@ -327,6 +384,15 @@ ExtendBordersResult extendBorders(TriMesh& mesh, const ExtendBordersOptions& opt
         const Vec3 c = (mesh.points[t[0]] + mesh.points[t[1]] + mesh.points[t[2]]) / 3.0;
         faces.add(c, c, f);
     }
+    // The faces again, in cubes of two steps, for the mirror heights.
+    const double cube = 2.0 * options.step;
+    CubeBins fineFaces(cube);
+    for (std::uint32_t f = 0; f < mesh.numTriangles(); ++f) {
+        const Triangle& t = mesh.triangles[f];
+        const Vec3 &a = mesh.points[t[0]], &b = mesh.points[t[1]], &c = mesh.points[t[2]];
+        fineFaces.add(Vec3{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})},
+                      Vec3{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})}, f);
+    }
     CubeBins edgeBins(options.width);
     for (std::uint32_t e = 0; e < edges.size(); ++e) {
         const Vec3 &a = mesh.points[edges[e].from], &b = mesh.points[edges[e].to];
@@ -344,7 +410,7 @@ ExtendBordersResult extendBorders(TriMesh& mesh, const ExtendBordersOptions& opt
     }
     for (std::uint32_t id = 0; id < chains.size(); ++id) {
         const Chain& chain = chains[id];
-        std::vector<Column> columns = columnsOf(mesh, edges, chain, faces, options.fitRadius, rings);
+        std::vector<Column> columns = columnsOf(mesh, edges, chain, faces, fineFaces, cube, options.fitRadius, rings);
         result.numTrimmed += trimColumns(mesh, edges, places, edgeBins, rings, id, chain, options.fitRadius, columns);
         for (Column& col : columns) {
             col.firstNew = std::uint32_t(mesh.numVertices());

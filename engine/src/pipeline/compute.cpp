@@ -238,7 +238,7 @@ double continuationFitRadius(const ScalePlan& plan)
     return std::max(0.25 * plan.radii.back(), 3.0 * plan.vertexSpacing);
 }
 
-double continuationReach(const ScalePlan& plan) { return 2.5 * haloWidth(plan) + continuationFitRadius(plan); }
+double continuationReach(const ScalePlan& plan) { return 3.0 * haloWidth(plan) + continuationFitRadius(plan); }
 
 ComputeResult compute(const TriMesh& input, const ComputeOptions& options, RunContext* context)
 {

@@ -4,7 +4,8 @@
 /// "Values up to the border"): every border left open after hole filling (the rim of a
 /// one-sided scan, a DEM's edge, a gap too large to fill, a hole CGAL could not
 /// triangulate) gets a skirt that carries the surface's tangent plane at the border out to
-/// a given width. The balls of vertices near a border then see a surface everywhere, as
+/// a given width, with half the surface's own heights above that plane mirrored through the
+/// border (so that curvature and roughness partly go on). The balls of vertices near a border then see a surface everywhere, as
 /// they do over a filled hole; how much of each ball rests on the skirt is reported
 /// (fillShare). A plane and a uniform slope continue as themselves, so their values are
 /// exact up to the border; values whose ball does not reach a border do not change.
@@ -42,7 +43,7 @@ struct ExtendBordersResult {
 };
 
 /// Appends a skirt past every border of @p mesh (nothing else changes). Deterministic and
-/// local: the skirt near a point depends only on the mesh within 1.5 width + fitRadius of it,
+/// local: the skirt near a point depends only on the mesh within 2 width + fitRadius of it,
 /// so that tiles and DEM windows with that much margin build the same skirt as the whole.
 /// @pre The mesh is edge- and vertex-manifold and consistently oriented
 ///      (mesh/prepare_mesh.h makes it so).

@@ -70,8 +70,8 @@ struct ComputeOptions {
 /// spacings (docs/method.md, Values up to the border).
 double continuationFitRadius(const ScalePlan& plan);
 /// How far from a vertex the continuation it sees depends on the mesh: its ball's reach to
-/// a border, the skirt's width from there (both haloWidth), and along the border the fit
-/// radius and half the width (ExtendBordersOptions). A DEM window
+/// a border, the skirt's width from there and the mirror points as far inside (each
+/// haloWidth), and the fit radius (ExtendBordersOptions). A DEM window
 /// whose own cells are this far from its cut edges builds the same continuation as the
 /// whole raster.
 double continuationReach(const ScalePlan& plan);
