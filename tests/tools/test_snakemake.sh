@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The Snakemake workflow of samples/snakemake on a folder of generated scans:
 # runs locally with --cores 2; every scan gives the same PLY as `msii compute` run directly
-# (byte for byte), a picture and a summary line; a DEM gives the GeoTIFF msii compute gives; a rerun does nothing; a broken scan fails
+# (byte for byte), a picture and a summary line; a DEM gives the GeoTIFF msii compute gives; border=mask
+# is passed on; a rerun does nothing; a broken scan fails
 # its job while the others finish (--keep-going); the workflow is ready for Slurm (dry run).
 # Usage: test_snakemake.sh MSII MSII_SAMPLES SNAKEFILE
 set -euo pipefail
@@ -55,6 +56,13 @@ for name in a b c; do
   cmp -s results-tiled/$name.msii.ply direct-$name.ply || fail "$name: the merged tiles differ from msii compute's"
 done
 grep -q '"tiles_per_axis": 2' results-tiled/a.msii.json || fail "the merged JSON does not record the tiles"
+
+# border=mask: the workflow passes it on (NaN where a ball reaches the tablet's rim).
+snakemake --snakefile "$snakefile" --cores 2 -q --config scans=scans results=results-mask radius=0.6 scales=4 \
+  msii="$msii" border=mask pictures=0 > log6.txt 2>&1 || { cat log6.txt; fail "the workflow with border=mask failed"; }
+"$msii" compute scans/a.ply --radius 0.6 --scales 4 --border mask --quiet --output direct-mask-a.ply
+cmp -s results-mask/a.msii.ply direct-mask-a.ply || fail "a: border=mask differs from msii compute --border mask"
+cmp -s results-mask/a.msii.ply direct-a.ply && fail "a: border=mask gave the continued values"
 
 # Ready for a cluster: the same workflow plans its jobs for Slurm (dry run).
 snakemake --snakefile "$snakefile" --slurm --jobs 10 --default-resources slurm_partition=main runtime=60 -n \

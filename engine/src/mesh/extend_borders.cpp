@@ -228,16 +228,17 @@ Chain chainOf(const TriMesh& mesh, const std::vector<BorderEdge>& edges, std::ve
     return c;
 }
 
-/// The columns of @p chain, one per vertex, grown ring by ring. The tangent plane fitted at
-/// the border vertex b carries the column out: each step goes along the outward directions of
-/// the border edges, averaged along the chain with triangular weights over ρ + s/2 (ρ =
-/// @p radius, s the ring's distance) and put into that plane; the average widens outwards, so
+/// The columns of @p chain, one per vertex, grown ring by ring. The tangent plane fitted
+/// around the border carries the column out: each step goes along the outward directions of
+/// the border edges, put into the plane whose normal is the average of the normals fitted at
+/// the border vertices (over ρ = @p radius each), both averaged along the chain with
+/// triangular weights over ρ + s/2 (s the ring's distance); the averages widen outwards, so
 /// that columns from a jagged border run nearly parallel instead of crossing. Off the plane,
 /// the surface's own height above it is mirrored through b: the ring at x = b + s·t (in the
 /// plane) rises by kMirrorShare times the surface's height above the plane at 2b − x, so that
-/// curvature and roughness partly go on past the border; where the mirror point has no
-/// surface under it (within ±s), the last height found holds. On a plane every ring stays in
-/// it.
+/// curvature and features partly go on past the border; where the mirror point has no
+/// surface under it (within ±s), the last height found holds. The heights are averaged across
+/// columns like the directions. On a plane every ring stays in it.
 std::vector<Column> columnsOf(const TriMesh& mesh, const std::vector<BorderEdge>& edges, const Chain& chain,
                               const CubeBins& faces, const CubeBins& fineFaces, double cube, double radius,
                               const std::vector<double>& rings)
@@ -251,16 +252,26 @@ std::vector<Column> columnsOf(const TriMesh& mesh, const std::vector<BorderEdge>
         outward[k] = outward[k] + away;
         outward[(k + 1) % n] = outward[(k + 1) % n] + away;
     }
+    std::vector<Vec3> fitted(n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const auto& range) {
+        for (std::size_t k = range.begin(); k < range.end(); ++k)
+            fitted[k] = fittedNormal(mesh, faces, mesh.points[chain.vertices[k]], radius, Vec3{0, 0, 0});
+    });
+    // Pass 1, per column: the neighbours along the chain, the plane and direction of each
+    // ring, the in-plane path and the mirrored heights.
     std::vector<Column> columns(n);
+    std::vector<std::vector<std::pair<std::size_t, double>>> nearOf(n);
+    std::vector<std::vector<Vec3>> normals(n);
+    std::vector<std::vector<double>> heights(n);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const auto& range) {
         for (std::size_t k = range.begin(); k < range.end(); ++k) {
             Column& col = columns[k];
             col.vertex = chain.vertices[k];
             const Vec3& p = mesh.points[col.vertex];
-            const Vec3 normal = fittedNormal(mesh, faces, p, radius, Vec3{0, 0, 0});
-            const Vec3 own = normalized(outward[k] - normal * dot(outward[k], normal));
+            const Vec3 own = normalized(outward[k] - fitted[k] * dot(outward[k], fitted[k]));
             // The neighbours along the chain, nearest first on each side, with their distance.
-            std::vector<std::pair<std::size_t, double>> near{{k, 0.0}};
+            std::vector<std::pair<std::size_t, double>>& near = nearOf[k];
+            near.push_back({k, 0.0});
             const double widest = radius + 0.5 * rings.back();
             for (std::size_t s = 1; s < n && (chain.loop || s <= k); ++s) {
                 const double d = chain.between(chain.arc[(k + n - s) % n], chain.arc[k]);
@@ -273,25 +284,48 @@ std::vector<Column> columnsOf(const TriMesh& mesh, const std::vector<BorderEdge>
                 near.push_back({(k + s) % n, d});
             }
             col.at.assign(rings.size(), p);
-            const bool mirror = squaredNorm(normal) > 0.5;
+            normals[k].assign(rings.size(), fitted[k]);
+            heights[k].assign(rings.size(), 0.0);
             Vec3 inPlane = p;
             double height = 0;
             for (std::size_t r = 1; r < rings.size(); ++r) {
+                // The outward directions and the fitted normals, averaged alike: neighbouring
+                // columns keep nearly the same plane, so the skirt does not fan out in height.
                 const double h = radius + 0.5 * rings[r - 1];
-                Vec3 sum{0, 0, 0};
+                Vec3 sum{0, 0, 0}, normalSum{0, 0, 0};
                 for (const auto& [j, d] : near)
-                    if (d < h) sum = sum + outward[j] * (1.0 - d / h);
+                    if (d < h) {
+                        sum = sum + outward[j] * (1.0 - d / h);
+                        normalSum = normalSum + fitted[j] * (1.0 - d / h);
+                    }
+                const double normalLength = norm(normalSum);
+                const Vec3 normal = normalLength > 0 && std::isfinite(normalLength) ? normalSum / normalLength : fitted[k];
                 Vec3 t = sum - normal * dot(sum, normal);
                 const double len = norm(t);
                 t = len > 1e-9 * norm(sum) && std::isfinite(len) ? t / len : own;
                 inPlane = inPlane + t * (rings[r] - rings[r - 1]);
-                if (mirror)
+                if (squaredNorm(normal) > 0.5)
                     if (const std::optional<double> found =
                             heightAt(mesh, fineFaces, cube, p * 2.0 - inPlane, normal, rings[r]))
                         height = *found;
-                col.at[r] = inPlane + normal * (kMirrorShare * height);
+                col.at[r] = inPlane;
+                normals[k][r] = normal;
+                heights[k][r] = height;
             }
         }
+    });
+    // Pass 2: the heights averaged across columns with the same weights (a jagged border
+    // mirrors each column about a slightly different point; averaging keeps the skirt from
+    // turning that into a sawtooth), kMirrorShare of them off the plane.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const auto& range) {
+        for (std::size_t k = range.begin(); k < range.end(); ++k)
+            for (std::size_t r = 1; r < rings.size(); ++r) {
+                const double h = radius + 0.5 * rings[r - 1];
+                double sum = 0, weights = 0;
+                for (const auto& [j, d] : nearOf[k])
+                    if (d < h) sum += heights[j][r] * (1.0 - d / h), weights += 1.0 - d / h;
+                columns[k].at[r] = columns[k].at[r] + normals[k][r] * (kMirrorShare * sum / weights);
+            }
     });
     return columns;
 }
