@@ -205,6 +205,11 @@ void computeLocalValues(const TriMesh& mesh, const InvariantsOptions& options, I
     std::vector<double> border;
     if (!result.check.closed && options.maskBorders)
         border = borderDistance(mesh, result.check.borderEdges, result.plan.reach + 2.0 * result.plan.voxelSize);
+    if (options.evaluatedVertices > 0 && options.evaluatedVertices < mesh.numVertices()) {
+        // The vertices past the count are masked as if on a border: no values, no work.
+        if (border.empty()) border.assign(mesh.numVertices(), std::numeric_limits<double>::infinity());
+        std::fill(border.begin() + std::ptrdiff_t(options.evaluatedVertices), border.end(), 0.0);
+    }
     if (options.exact)
         computeExactValues(mesh, options, border, result, context);
     else

@@ -54,6 +54,20 @@ public:
                 }
     }
 
+    /// Calls @p f(item) for the items in the cubes that a ball of @p radius about @p p touches.
+    template <class F>
+    void within(const Vec3& p, double radius, F&& f) const
+    {
+        const auto lo = cube(p - Vec3{radius, radius, radius}), hi = cube(p + Vec3{radius, radius, radius});
+        for (auto x = lo[0]; x <= hi[0]; ++x)
+            for (auto y = lo[1]; y <= hi[1]; ++y)
+                for (auto z = lo[2]; z <= hi[2]; ++z) {
+                    const auto it = mBins.find(key({x, y, z}));
+                    if (it == mBins.end()) continue;
+                    for (std::uint32_t item : it->second) f(item);
+                }
+    }
+
 private:
     std::array<std::int64_t, 3> cube(const Vec3& p) const
     {
@@ -361,7 +375,7 @@ std::size_t trimColumns(const TriMesh& mesh, const std::vector<BorderEdge>& edge
                 const Vec3& v = col.at[k];
                 const double limit2 = 0.85 * 0.85 * rings[k] * rings[k];
                 bool nearer = false;
-                edgeBins.around(v, [&](std::uint32_t e) {
+                edgeBins.within(v, 0.85 * rings[k], [&](std::uint32_t e) {
                     if (nearer) return;
                     if (places[e].chain == chainId && chain.between(places[e].arc, chain.arc[c]) <= radius + rings[k]) return;
                     nearer = pointSegmentDistance2(v, mesh.points[edges[e].from], mesh.points[edges[e].to]) < limit2;
@@ -427,7 +441,7 @@ ExtendBordersResult extendBorders(TriMesh& mesh, const ExtendBordersOptions& opt
         fineFaces.add(Vec3{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})},
                       Vec3{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})}, f);
     }
-    CubeBins edgeBins(options.width);
+    CubeBins edgeBins(std::max(4.0 * options.step, options.width / 8.0));
     for (std::uint32_t e = 0; e < edges.size(); ++e) {
         const Vec3 &a = mesh.points[edges[e].from], &b = mesh.points[edges[e].to];
         edgeBins.add(Vec3{std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)},

@@ -240,7 +240,7 @@ std::size_t turnClosedPartsOutward(TriMesh& mesh, const MeshCheckResult& check, 
 
 /// The fill triangles cut into pieces much smaller than R, each piece's area at its
 /// centroid, summed over the ball of radius R of each vertex.
-std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double radius)
+std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double radius, std::size_t count)
 {
     struct Piece {
         Vec3 at;
@@ -273,7 +273,8 @@ std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double 
     for (std::size_t i = 0; i < pieces.size(); ++i) cells[keyOf(cellOf(pieces[i].at))].push_back(std::uint32_t(i));
     const double r2 = radius * radius, disc = M_PI * radius * radius;
     std::vector<float> share(mesh.numVertices(), 0.0f);
-    forEachBlock(mesh.numVertices(), [&](std::size_t, std::size_t begin, std::size_t end) {
+    const std::size_t wanted = count > 0 ? std::min(count, mesh.numVertices()) : mesh.numVertices();
+    forEachBlock(wanted, [&](std::size_t, std::size_t begin, std::size_t end) {
         for (std::size_t v = begin; v < end; ++v) {
             const Vec3& p = mesh.points[v];
             const auto c = cellOf(p);

@@ -65,9 +65,10 @@ std::optional<InvariantsResult> continueBorders(PrepareMeshResult& prepared, con
     result.preparation.borders = e;
     invariants.plan = planned.plan;
     invariants.maskBorders = false;
+    invariants.evaluatedVertices = e.firstNewVertex;  // the surface's vertices, not the skirt's
     result.diagnostics.insert(result.diagnostics.end(), planned.diagnostics.begin(), planned.diagnostics.end());
     if (e.numChains > 0) {
-        prepared.filledShare = fillShare(prepared.mesh, prepared.firstFillTriangle, invariants.radius);
+        prepared.filledShare = fillShare(prepared.mesh, prepared.firstFillTriangle, invariants.radius, e.firstNewVertex);
         std::ostringstream msg;
         msg.precision(3);
         msg << "continued the surface past " << e.numChains << (e.numChains == 1 ? " border" : " borders")

@@ -287,6 +287,7 @@ InvariantsResult computeTiles(const TriMesh& mesh, const InvariantsOptions& opti
     for (int t = 0; t < n * n; ++t) tilesWithVertices += ownVertices.begin(t) != ownVertices.end(t);
     InvariantsOptions tileOptions = options;
     tileOptions.plan = result.plan;  // every tile takes the whole mesh's plan
+    tileOptions.evaluatedVertices = 0;  // a tile's numbering is its own
     std::size_t computed = 0;
     std::vector<std::uint32_t> local(nv, kNone), global;  // vertex numbers in and out of the tile
     for (int t = 0; t < n * n; ++t) {

@@ -49,6 +49,10 @@ struct InvariantsOptions {
     /// Border masks). Off for a mesh continued past its borders (mesh/extend_borders.h),
     /// whose few borders left (where skirts meet) are taken as the surface.
     bool maskBorders = true;
+    /// Only the first this many vertices get values (the rest NaN, and their work skipped
+    /// where the computation allows); 0 = all. The continuation's vertices, appended after the
+    /// surface's, need none. Pieces (tiles) compute all of theirs.
+    std::size_t evaluatedVertices = 0;
 
     /// Selects the invariants of @p list (and no others).
     void select(const std::vector<Invariant>& list);

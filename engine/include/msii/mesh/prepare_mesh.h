@@ -66,8 +66,9 @@ struct PrepareMeshResult {
 PrepareMeshResult prepareMesh(const TriMesh& input, const PrepareMeshOptions& options = {});
 
 /// Per vertex of @p mesh: the area of triangles firstFill ... inside the ball of radius
-/// @p radius, divided by πR² (the area a flat disc has there), at most 1 (filledShare).
-std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double radius);
+/// @p radius, divided by πR² (the area a flat disc has there), at most 1 (filledShare); for
+/// the first @p count vertices (0 = all), the others 0.
+std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double radius, std::size_t count = 0);
 
 /// The default hole size for a largest radius R: loops of at most πR, the perimeter of a
 /// disc of diameter R, i.e. holes that fit well inside the largest ball (docs/method.md,
