@@ -230,7 +230,8 @@ private:
         std::ostringstream comment;
         comment << "msii " << versionString() << " compute" << (mArgs.exact ? " --exact" : "") << " R=" << mArgs.radius
                 << " N=" << plan.radii.size() << " voxel=" << plan.voxelSize << "; " << featureLegend()
-                << "; NaN = ball reaches the border" << (mArgs.exact ? " or vertex not computed" : "")
+                << (mArgs.border == "mask" ? "; NaN = ball reaches the border" : "; borders continued (filled_share)")
+                << (mArgs.exact ? (mArgs.border == "mask" ? " or vertex not computed" : "; NaN = vertex not computed") : "")
                 << "; quality = " << qualitySource(features).substr(0, 1)
                 << " at the largest radius with a value (a plane's value if none), valid_radii = how many "
                    "radii have one";

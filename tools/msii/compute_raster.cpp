@@ -47,7 +47,8 @@ OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, co
     std::ostringstream description;
     description << "msii " << versionString() << " compute R=" << args.radius << " N=" << args.scales << " of "
                 << fs::path(input).filename().string() << "; " << featureLegend()
-                << "; NaN = nodata or ball reaches the border";
+                << (args.border == "mask" ? "; NaN = nodata or ball reaches the border"
+                                          : "; NaN = nodata; filled_share = share of the ball on continued or filled surface");
     options.output.description = description.str();
     std::ostringstream radii;
     for (int j = 1; j <= args.scales; ++j) radii << (j > 1 ? "," : "") << args.radius * j / args.scales;

@@ -441,7 +441,7 @@ ExtendBordersResult extendBorders(TriMesh& mesh, const ExtendBordersOptions& opt
         fineFaces.add(Vec3{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})},
                       Vec3{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})}, f);
     }
-    CubeBins edgeBins(std::max(4.0 * options.step, options.width / 8.0));
+    CubeBins edgeBins(std::max(4.0 * options.step, options.width / 2.0));
     for (std::uint32_t e = 0; e < edges.size(); ++e) {
         const Vec3 &a = mesh.points[edges[e].from], &b = mesh.points[edges[e].to];
         edgeBins.add(Vec3{std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)},

@@ -41,6 +41,50 @@ PrepareMeshResult prepare(const TriMesh& input, const ComputeOptions& options, C
     return prepared;
 }
 
+/// Drops the triangles of @p prepared that lie wholly farther than @p halo from @p box (the
+/// values in the box depend on none of them: haloWidth, so they are as in the whole), and the
+/// vertices left in no face, renumbering the rest in order. Returns the new number of vertex
+/// @p firstNew (the first of the skirt's).
+std::size_t keepNear(PrepareMeshResult& prepared, const BoundingBox& box, double halo, std::size_t firstNew)
+{
+    BoundingBox grown = box;
+    grown.min = grown.min - Vec3{halo, halo, halo};
+    grown.max = grown.max + Vec3{halo, halo, halo};
+    std::vector<Triangle> kept;
+    std::size_t fill = prepared.firstFillTriangle;
+    for (std::size_t f = 0; f < prepared.mesh.numTriangles(); ++f) {
+        const Triangle& t = prepared.mesh.triangles[f];
+        BoundingBox tb;
+        for (std::uint32_t v : t) tb.add(prepared.mesh.points[v]);
+        const bool keep = tb.max.x >= grown.min.x && tb.min.x <= grown.max.x && tb.max.y >= grown.min.y &&
+                          tb.min.y <= grown.max.y && tb.max.z >= grown.min.z && tb.min.z <= grown.max.z;
+        if (keep) kept.push_back(t);
+        else if (f < prepared.firstFillTriangle) --fill;
+    }
+    prepared.mesh.triangles.swap(kept);
+    prepared.firstFillTriangle = fill;
+    // Vertices in no face: dropped (their values would be NaN, and searching for the surface
+    // from far off is slow).
+    constexpr std::uint32_t kNone = PrepareMeshResult::kNoVertex;
+    std::vector<std::uint32_t> renumbered(prepared.mesh.numVertices(), kNone);
+    for (const Triangle& t : prepared.mesh.triangles)
+        for (std::uint32_t v : t) renumbered[v] = 0;
+    std::vector<Vec3> points;
+    std::size_t newFirst = 0;
+    for (std::size_t v = 0; v < renumbered.size(); ++v) {
+        if (renumbered[v] == kNone) continue;
+        renumbered[v] = std::uint32_t(points.size());
+        points.push_back(prepared.mesh.points[v]);
+        if (v < firstNew) newFirst = points.size();
+    }
+    for (Triangle& t : prepared.mesh.triangles)
+        for (std::uint32_t& v : t) v = renumbered[v];
+    prepared.mesh.points.swap(points);
+    for (std::uint32_t& p : prepared.preparedOf)
+        if (p != kNone) p = renumbered[p];
+    return newFirst;
+}
+
 /// Stage 1b (BorderHandling::Continue): the prepared mesh continued past the borders left open,
 /// planned on the surface as prepared (the continuation changes neither the plan nor the
 /// statistics), with the filled share over fill and continuation together. Returns the
@@ -63,12 +107,15 @@ std::optional<InvariantsResult> continueBorders(PrepareMeshResult& prepared, con
     }
     const ExtendBordersResult e = extendBorders(prepared.mesh, eo);
     result.preparation.borders = e;
+    std::size_t firstNew = e.firstNewVertex;
+    if (!options.valuesWithin.empty()) firstNew = keepNear(prepared, options.valuesWithin, haloWidth(planned.plan), firstNew);
     invariants.plan = planned.plan;
     invariants.maskBorders = false;
-    invariants.evaluatedVertices = e.firstNewVertex;  // the surface's vertices, not the skirt's
+    invariants.evaluatedVertices = firstNew;  // the surface's vertices, not the skirt's
     result.diagnostics.insert(result.diagnostics.end(), planned.diagnostics.begin(), planned.diagnostics.end());
+    if (e.numChains > 0 || !options.valuesWithin.empty())
+        prepared.filledShare = fillShare(prepared.mesh, prepared.firstFillTriangle, invariants.radius, firstNew);
     if (e.numChains > 0) {
-        prepared.filledShare = fillShare(prepared.mesh, prepared.firstFillTriangle, invariants.radius, e.firstNewVertex);
         std::ostringstream msg;
         msg.precision(3);
         msg << "continued the surface past " << e.numChains << (e.numChains == 1 ? " border" : " borders")

@@ -79,6 +79,7 @@ struct WindowLayout {
     int width = 0, height = 0;       ///< of the raster, cells
     int side = 0;                    ///< own cells per window side
     int narrowHalo = 0, wideHalo = 0;  ///< cells
+    double cell = 0;                 ///< the shortest step between cell centres, ground units
     bool oneWindow = true;
     /// Windows' options: with the shared plan when there are several.
     ComputeOptions options;
@@ -124,6 +125,7 @@ WindowLayout layWindows(const DemSource& source, const std::string& input, const
     w.options.tiling = TilingOptions();  // each window in one piece
     // The shortest step between neighbouring cell centres on the ground.
     const double cell = std::min(std::hypot(t[1], t[4]), std::hypot(t[2], t[5]));
+    w.cell = cell;
     const double budget =
         options.compute.tiling.memoryBudget > 0 ? options.compute.tiling.memoryBudget : kDefaultDemMemoryBudget;
     const double cellsPerWindow = budget / computationBytesPerVertex(asked);
@@ -137,10 +139,14 @@ WindowLayout layWindows(const DemSource& source, const std::string& input, const
     // The narrow halo holds everything the own cells depend on; the wide one also a hole next
     // to the window's edge that the whole raster would fill (at most half its perimeter across).
     w.narrowHalo = int(std::ceil(haloWidth(plan) / cell)) + 1;
-    double wide = haloWidth(plan) + 0.5 * w.options.maxHolePerimeter;
-    if (w.options.border == BorderHandling::Continue) wide = std::max(wide, continuationReach(plan));
-    w.wideHalo = int(std::ceil(wide / cell)) + 1;
-    w.side = options.windowCells > 0 ? options.windowCells : int(std::floor(std::sqrt(cellsPerWindow))) - 2 * w.wideHalo;
+    // Windows are sized for the wide halo of hole filling; one read wider for the
+    // continuation computes only what is within the narrow halo of its own cells
+    // (ComputeOptions::valuesWithin), so it costs about as much.
+    const int fillHalo = int(std::ceil((haloWidth(plan) + 0.5 * w.options.maxHolePerimeter) / cell)) + 1;
+    w.wideHalo = fillHalo;
+    if (w.options.border == BorderHandling::Continue)
+        w.wideHalo = std::max(fillHalo, int(std::ceil(continuationReach(plan) / cell)) + 1);
+    w.side = options.windowCells > 0 ? options.windowCells : int(std::floor(std::sqrt(cellsPerWindow))) - 2 * fillHalo;
     if (w.side < 16)
         throw InvalidInputError("the memory budget is too small for a window of the raster at this radius (its halo is " +
                                 std::to_string(w.wideHalo) + " cells wide)");
@@ -160,13 +166,43 @@ struct Window {
     }
 };
 
+/// Whether the @p bw × @p bh cells of @p heights have a nodata gap that hole filling leaves
+/// open: one whose border (its cell edges next to cells with heights, half as long again
+/// for the staircase) is longer than @p maxPerimeter.
+bool hasOpenGap(const std::vector<float>& heights, int bw, int bh, double cell, double maxPerimeter)
+{
+    std::vector<char> seen(heights.size(), 0);
+    std::vector<std::size_t> stack;
+    const auto index = [&](int x, int y) { return std::size_t(y) * std::size_t(bw) + std::size_t(x); };
+    for (std::size_t start = 0; start < heights.size(); ++start) {
+        if (seen[start] || !std::isnan(heights[start])) continue;
+        std::size_t edges = 0;
+        seen[start] = 1;
+        stack.assign(1, start);
+        while (!stack.empty()) {
+            const std::size_t c = stack.back();
+            stack.pop_back();
+            const int x = int(c % std::size_t(bw)), y = int(c / std::size_t(bw));
+            for (const auto& [dx, dy] : {std::pair{1, 0}, std::pair{-1, 0}, std::pair{0, 1}, std::pair{0, -1}}) {
+                const int nx = x + dx, ny = y + dy;
+                if (nx < 0 || ny < 0 || nx >= bw || ny >= bh) continue;
+                const std::size_t n = index(nx, ny);
+                if (!std::isnan(heights[n])) ++edges;
+                else if (!seen[n]) seen[n] = 1, stack.push_back(n);
+            }
+        }
+        if (1.5 * double(edges) * cell > maxPerimeter) return true;
+    }
+    return false;
+}
+
 /// Reads window (wx, wy) with the narrow halo, or the wide one if a nodata gap crosses the
 /// narrow one's edge: such a gap would be filled in the whole DEM but is a border in the
 /// window. A gap that crosses has a cell on the narrow window's outermost rows or columns
 /// (those on the DEM's edge excepted: there the whole DEM has the same border). When
-/// borders are continued, any border in the narrow box (a gap, the DEM's edge) takes the
-/// wide one: the continuation the own cells see depends on the raster that far
-/// (continuationReach).
+/// borders are continued, a border in the narrow box (the DEM's edge, a gap too large to
+/// fill) takes the wide one: the continuation the own cells see depends on the raster that
+/// far (continuationReach).
 Window readWindow(const DemSource& source, const WindowLayout& w, int wx, int wy)
 {
     Window win;
@@ -183,7 +219,7 @@ Window readWindow(const DemSource& source, const WindowLayout& w, int wx, int wy
     const auto gap = [&](int x, int y) { return std::isnan(win.dem.heights[std::size_t(y) * std::size_t(bw) + std::size_t(x)]); };
     bool crossed = w.options.border == BorderHandling::Continue &&
                    (win.box[0] == 0 || win.box[1] == 0 || win.box[2] == w.width || win.box[3] == w.height ||
-                    win.dem.numValid < std::size_t(bw) * std::size_t(bh));
+                    hasOpenGap(win.dem.heights, bw, bh, w.cell, w.options.maxHolePerimeter));
     for (int x = 0; x < bw && !crossed; ++x)
         crossed = (win.box[1] > 0 && gap(x, 0)) || (win.box[3] < w.height && gap(x, bh - 1));
     for (int y = 0; y < bh && !crossed; ++y)
@@ -250,6 +286,17 @@ std::vector<std::vector<float>> computeWindow(const Window& win, const WindowLay
                                                std::vector<float>(dm.vertexOfCell.size(), std::numeric_limits<float>::quiet_NaN()));
     ComputeOptions options = w.options;
     options.cutVertices = cutVerticesOf(win, w, dm);
+    if (win.wide && options.border == BorderHandling::Continue)
+        for (int y = win.row; y < win.row + win.rows; ++y)
+            for (int x = win.col; x < win.col + win.cols; ++x)
+                if (const std::uint32_t v = dm.vertexOfCell[win.boxCell(x, y)]; v != DemMesh::kNoVertex) {
+                    const Vec3& p = dm.mesh.points[v];
+                    options.valuesWithin.add({p.x, p.y, 0.0});
+                }
+    if (!options.valuesWithin.empty()) {  // every height
+        options.valuesWithin.min.z = -std::numeric_limits<double>::infinity();
+        options.valuesWithin.max.z = std::numeric_limits<double>::infinity();
+    }
     const ComputeResult r = compute(dm.mesh, options, context);
     if (w.oneWindow) result.plan = r.plan;
     for (const Diagnostic& d : r.diagnostics)

@@ -43,7 +43,7 @@ struct ExtendBordersResult {
 };
 
 /// Appends a skirt past every border of @p mesh (nothing else changes). Deterministic and
-/// local: the skirt near a point depends only on the mesh within 2 width + fitRadius of it,
+/// local: the skirt near a point depends only on the mesh within 3 width + fitRadius of it,
 /// so that tiles and DEM windows with that much margin build the same skirt as the whole.
 /// @pre The mesh is edge- and vertex-manifold and consistently oriented
 ///      (mesh/prepare_mesh.h makes it so).

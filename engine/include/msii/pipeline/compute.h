@@ -61,6 +61,11 @@ struct ComputeOptions {
     /// Input vertices on cuts through a larger surface (a DEM window's inner edges): a border
     /// edge between two of them is no border of the surface (ExtendBordersOptions::onCut).
     std::vector<std::uint32_t> cutVertices;
+    /// Where values are wanted (a DEM window's own cells), if not everywhere: once the
+    /// continuation is built from the whole input, the surface farther than the halo
+    /// (haloWidth) from this box is dropped, so that a wide window read for the continuation
+    /// costs no more to compute than a narrow one. Values outside the box are NaN or partial.
+    BoundingBox valuesWithin;
     /// In tiles, to fit a memory budget (not with the exact mode).
     TilingOptions tiling;
 };
