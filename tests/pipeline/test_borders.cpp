@@ -202,10 +202,14 @@ TEST(Borders, BallsClearOfBordersKeepTheirValuesBitForBit)
             for (std::size_t j = 0; j < continued.features[i].size(); ++j) {
                 const float c = continued.features[i][j][v];
                 nan += std::isnan(c);
-                if (all) EXPECT_EQ(c, masked.features[i][j][v]) << invariantLetter(i) << " vertex " << v;
+                if (all) {
+                    EXPECT_EQ(c, masked.features[i][j][v]) << invariantLetter(i) << " vertex " << v;
+                }
             }
         clear += all;
-        if (all) EXPECT_EQ(continued.filledShare[v], 0.0f);
+        if (all) {
+            EXPECT_EQ(continued.filledShare[v], 0.0f);
+        }
     }
     EXPECT_GT(clear, mesh.numVertices() / 10);
     EXPECT_EQ(nan, 0u);
@@ -329,7 +333,9 @@ TEST(Borders, GapsOfAnySizeGetValues)
                 for (const std::vector<float>& column : r.features[i]) values += !std::isnan(column[v]), ++expected;
             shared += r.filledShare[v] > 0;
             const double toGap = std::hypot(mesh.points[v].x - centre.x, mesh.points[v].y - centre.y) - 6.0;
-            if (toGap < 3.5) EXPECT_GT(r.filledShare[v], 0.0f) << "vertex " << v;
+            if (toGap < 3.5) {
+                EXPECT_GT(r.filledShare[v], 0.0f) << "vertex " << v;
+            }
         }
         EXPECT_EQ(values, expected) << "fill " << fill;
         EXPECT_EQ(r.masked.withFilledShare, shared);

@@ -228,7 +228,9 @@ TEST(MsiiTerrain, WindowsEqualOnePieceWithoutSeams)
         ASSERT_NE(at, std::string::npos);
         const int wide = std::stoi(json.substr(at + 26));
         EXPECT_GT(wide, 0);
-        if (border == "mask") EXPECT_LT(wide, 12);
+        if (border == "mask") {
+            EXPECT_LT(wide, 12);
+        }
         const RasterImage a = readRaster(one.string()), b = readRaster(windows.string());
         ASSERT_EQ(a.bands.size(), b.bands.size());
         std::size_t compared = 0, differing = 0, nan = 0;
@@ -244,7 +246,9 @@ TEST(MsiiTerrain, WindowsEqualOnePieceWithoutSeams)
         EXPECT_EQ(differing, 0u);
         EXPECT_GT(compared, 6u * 12000u);
         // Continued, only cells in no triangle (nodata around them) are NaN.
-        if (border == "continue") EXPECT_LT(double(nan), 0.25 * double(compared)) << nan;
+        if (border == "continue") {
+            EXPECT_LT(double(nan), 0.25 * double(compared)) << nan;
+        }
     }
 }
 
