@@ -17,14 +17,6 @@ namespace msii {
 
 namespace {
 
-double pointSegmentDistance2(const Vec3& p, const Vec3& a, const Vec3& b)
-{
-    const Vec3 ab = b - a;
-    const double len2 = squaredNorm(ab);
-    const double t = len2 > 0 ? std::clamp(dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
-    return squaredNorm(p - (a + ab * t));
-}
-
 std::uint64_t cellKey(std::int64_t x, std::int64_t y, std::int64_t z)
 {
     const std::uint64_t m = (1u << 21) - 1;

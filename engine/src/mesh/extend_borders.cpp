@@ -83,14 +83,6 @@ private:
     std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> mBins;
 };
 
-double pointSegmentDistance2(const Vec3& p, const Vec3& a, const Vec3& b)
-{
-    const Vec3 ab = b - a;
-    const double len2 = squaredNorm(ab);
-    const double t = len2 > 0 ? std::clamp(dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
-    return squaredNorm(p - (a + ab * t));
-}
-
 /// A border edge from -> to, in the direction of its one face, whose normal it keeps.
 struct BorderEdge {
     std::uint32_t from, to;

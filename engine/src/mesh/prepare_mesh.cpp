@@ -457,7 +457,7 @@ void fillHolesForComputation(const MeshCheckResult& check, const PrepareMeshOpti
         if (result.holes.numFailed > 0)
             result.changes.push_back({"holes_not_filled", result.holes.numFailed, {},
                                       "could not fill " + plural(result.holes.numFailed, "hole", "holes") +
-                                          "; values near them stay masked"});
+                                          "; their rims stay borders of the surface (continued past them, or masked, as chosen)"});
     }
     if (options.radius > 0)
         result.filledShare = result.holes.numFilled > 0 ? fillShare(mesh, result.firstFillTriangle, options.radius)

@@ -32,11 +32,6 @@ PrepareMeshResult prepare(const TriMesh& input, const ComputeOptions& options, C
     s.vertices = prepared.mesh.numVertices();
     s.faces = prepared.mesh.numTriangles();
     s.seconds = watch.seconds();
-    if (options.border == BorderHandling::Continue)
-        for (Diagnostic& d : s.changes)
-            if (d.kind == "holes_not_filled")
-                d.message = "could not fill " + std::to_string(d.count) + (d.count == 1 ? " hole" : " holes") +
-                            "; the surface is continued past their rims instead (filled_share)";
     result.diagnostics = s.changes;
     return prepared;
 }

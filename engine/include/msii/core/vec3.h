@@ -2,6 +2,7 @@
 /// @file vec3.h
 /// @brief A minimal 3-vector of doubles for mesh code (grid code uses OpenVDB's own types).
 
+#include <algorithm>
 #include <cmath>
 
 namespace msii {
@@ -40,6 +41,14 @@ inline Vec3 normalized(const Vec3& a)
 {
     const double n = norm(a);
     return n > 0 ? a / n : Vec3{};
+}
+/// Squared distance from @p p to the segment @p a @p b (a point if they coincide).
+inline double pointSegmentDistance2(const Vec3& p, const Vec3& a, const Vec3& b)
+{
+    const Vec3 ab = b - a;
+    const double len2 = squaredNorm(ab);
+    const double t = len2 > 0 ? std::clamp(dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
+    return squaredNorm(p - (a + ab * t));
 }
 
 } // namespace msii
