@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <optional>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 namespace msii {
@@ -89,16 +90,20 @@ struct BorderEdge {
     Vec3 faceNormal;  // unit
 };
 
-/// The border edges of @p mesh, cut edges left out, in the order of their faces.
+/// The border edges of @p mesh, cut edges left out, in the order of their faces. An edge
+/// a -> b is a border if no face has b -> a: looked up among b's outgoing edges, which are
+/// grouped by vertex (counting sort) rather than sorted, for meshes of millions of faces.
 std::vector<BorderEdge> borderEdgesOf(const TriMesh& mesh, const std::vector<char>& onCut)
 {
-    std::vector<std::uint64_t> directed;
-    directed.reserve(3 * mesh.numTriangles());
+    std::vector<std::uint32_t> first(mesh.numVertices() + 1, 0);
     for (const Triangle& t : mesh.triangles)
-        for (int k = 0; k < 3; ++k) directed.push_back(std::uint64_t(t[k]) << 32 | t[(k + 1) % 3]);
-    std::sort(directed.begin(), directed.end());
+        for (int k = 0; k < 3; ++k) ++first[t[k] + 1];
+    for (std::size_t v = 0; v < mesh.numVertices(); ++v) first[v + 1] += first[v];
+    std::vector<std::uint32_t> next(first.begin(), first.end() - 1), targets(first.back());
+    for (const Triangle& t : mesh.triangles)
+        for (int k = 0; k < 3; ++k) targets[next[t[k]]++] = t[(k + 1) % 3];
     const auto has = [&](std::uint32_t a, std::uint32_t b) {
-        return std::binary_search(directed.begin(), directed.end(), std::uint64_t(a) << 32 | b);
+        return std::find(targets.begin() + first[a], targets.begin() + first[a + 1], b) != targets.begin() + first[a + 1];
     };
     std::vector<BorderEdge> edges;
     for (const Triangle& t : mesh.triangles)
@@ -110,6 +115,50 @@ std::vector<BorderEdge> borderEdgesOf(const TriMesh& mesh, const std::vector<cha
             edges.push_back({a, b, normalized(n)});
         }
     return edges;
+}
+
+/// Which faces of @p mesh come within @p reach of a border vertex (by their bounding boxes,
+/// on a grid of reach / 4): only those can enter a fitted plane or a mirrored height, so only
+/// those are binned, and a large surface with a short border costs little.
+std::vector<char> facesNearBorders(const TriMesh& mesh, const std::vector<BorderEdge>& edges, double reach)
+{
+    const double g = reach / 4.0;
+    const auto cell = [&](const Vec3& p) {
+        return std::array<std::int64_t, 3>{std::int64_t(std::floor(p.x / g)), std::int64_t(std::floor(p.y / g)),
+                                           std::int64_t(std::floor(p.z / g))};
+    };
+    const auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) {
+        return std::uint64_t(x & 0x1FFFFF) << 42 | std::uint64_t(y & 0x1FFFFF) << 21 | std::uint64_t(z & 0x1FFFFF);
+    };
+    std::unordered_set<std::uint64_t> borderCells, near;
+    for (const BorderEdge& e : edges)
+        for (const std::uint32_t v : {e.from, e.to}) {
+            const auto c = cell(mesh.points[v]);
+            borderCells.insert(key(c[0], c[1], c[2]));
+        }
+    // A point within reach of a border vertex is at most 4 cells from the vertex's cell.
+    for (const std::uint64_t k : borderCells) {
+        const auto unpack = [](std::uint64_t v) { return std::int64_t(v & 0x1FFFFF); };
+        const std::int64_t x = unpack(k >> 42), y = unpack(k >> 21), z = unpack(k);
+        for (std::int64_t dx = -4; dx <= 4; ++dx)
+            for (std::int64_t dy = -4; dy <= 4; ++dy)
+                for (std::int64_t dz = -4; dz <= 4; ++dz) near.insert(key(x + dx, y + dy, z + dz));
+    }
+    std::vector<char> kept(mesh.numTriangles(), 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.numTriangles()), [&](const auto& range) {
+        for (std::size_t f = range.begin(); f < range.end(); ++f) {
+            const Triangle& t = mesh.triangles[f];
+            const Vec3 &a = mesh.points[t[0]], &b = mesh.points[t[1]], &c = mesh.points[t[2]];
+            const auto lo = cell({std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})});
+            const auto hi = cell({std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})});
+            bool found = false;
+            for (auto x = lo[0]; x <= hi[0] && !found; ++x)
+                for (auto y = lo[1]; y <= hi[1] && !found; ++y)
+                    for (auto z = lo[2]; z <= hi[2] && !found; ++z) found = near.count(key(x, y, z)) > 0;
+            kept[f] = found;
+        }
+    });
+    return kept;
 }
 
 /// Border runs: loops, or runs that end at a cut (or at a vertex where borders meet, which
@@ -418,18 +467,22 @@ ExtendBordersResult extendBorders(TriMesh& mesh, const ExtendBordersOptions& opt
     const std::vector<BorderEdge> edges = borderEdgesOf(mesh, options.onCut);
     if (edges.empty()) return result;
 
-    CubeBins faces(options.fitRadius);
-    for (std::uint32_t f = 0; f < mesh.numTriangles(); ++f) {
-        const Triangle& t = mesh.triangles[f];
-        const Vec3 c = (mesh.points[t[0]] + mesh.points[t[1]] + mesh.points[t[2]]) / 3.0;
-        faces.add(c, c, f);
-    }
-    // The faces again, in cubes of two steps, for the mirror heights.
+    // The faces a fitted plane (within fitRadius of a border vertex) or a mirrored height
+    // (a line within the last ring's distance of one, searched as far again along it) can
+    // meet; binned in the order of their indices, so that sums over a cube do not depend on
+    // which faces were left out.
+    const std::vector<double> rings = ringDistances(options.step, options.width);
     const double cube = 2.0 * options.step;
+    const std::vector<char> near = facesNearBorders(mesh, edges, std::max(options.fitRadius, 2.0 * rings.back()) + 2.0 * cube);
+    CubeBins faces(options.fitRadius);
+    // The faces again, in cubes of two steps, for the mirror heights.
     CubeBins fineFaces(cube);
     for (std::uint32_t f = 0; f < mesh.numTriangles(); ++f) {
+        if (!near[f]) continue;
         const Triangle& t = mesh.triangles[f];
         const Vec3 &a = mesh.points[t[0]], &b = mesh.points[t[1]], &c = mesh.points[t[2]];
+        const Vec3 centroid = (a + b + c) / 3.0;
+        faces.add(centroid, centroid, f);
         fineFaces.add(Vec3{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})},
                       Vec3{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})}, f);
     }
@@ -439,7 +492,6 @@ ExtendBordersResult extendBorders(TriMesh& mesh, const ExtendBordersOptions& opt
         edgeBins.add(Vec3{std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)},
                      Vec3{std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)}, e);
     }
-    const std::vector<double> rings = ringDistances(options.step, options.width);
 
     std::vector<Chain> chains;
     std::vector<EdgePlace> places(edges.size());

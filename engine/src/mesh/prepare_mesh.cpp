@@ -271,6 +271,15 @@ std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double 
     };
     std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells;
     for (std::size_t i = 0; i < pieces.size(); ++i) cells[keyOf(cellOf(pieces[i].at))].push_back(std::uint32_t(i));
+    // The cells next to a piece: a vertex in none of them is farther than R from every
+    // piece, and most vertices of a large surface with small holes are.
+    std::unordered_set<std::uint64_t> reached;
+    for (const auto& [key, list] : cells) {
+        const auto c = cellOf(pieces[list.front()].at);
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz) reached.insert(keyOf({c[0] + dx, c[1] + dy, c[2] + dz}));
+    }
     const double r2 = radius * radius, disc = M_PI * radius * radius;
     std::vector<float> share(mesh.numVertices(), 0.0f);
     const std::size_t wanted = count > 0 ? std::min(count, mesh.numVertices()) : mesh.numVertices();
@@ -278,6 +287,7 @@ std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double 
         for (std::size_t v = begin; v < end; ++v) {
             const Vec3& p = mesh.points[v];
             const auto c = cellOf(p);
+            if (!reached.count(keyOf(c))) continue;
             double sum = 0;
             for (int dx = -1; dx <= 1; ++dx)
                 for (int dy = -1; dy <= 1; ++dy)
