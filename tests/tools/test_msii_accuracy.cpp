@@ -101,3 +101,44 @@ TEST(AccuracyCli, MeshWithoutRadiusIsAUsageError)
     EXPECT_EQ(r.code, 2);
     EXPECT_NE(r.err.find("-r"), std::string::npos) << r.err;
 }
+
+// --by-radius splits the differences by range of radii (3-8, 8-16, over 16 median edges):
+// on a flat patch with R of 16 edges the first two ranges hold radii and are small, the
+// last holds none and says so ("–") instead of printing zeros.
+TEST(AccuracyCli, ByRadiusGivesEachRangeOrADash)
+{
+    const msii::test::TempDir dir;
+    samples::HeightFieldOptions o;
+    o.kind = samples::HeightFieldKind::Plane;
+    o.width = 5;
+    o.height = 5;
+    o.spacing = 0.05;
+    const std::string mesh = dir.file("plane.ply");
+    writePly(mesh, samples::makeHeightField(o), {});
+    const msii::test::RunResult r =
+        msii::test::runProgram(MSII_ACCURACY_EXE, "'" + mesh + "' -r 0.75 --vertices 40 --by-radius", dir.path());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const double edges = [&] {
+        const std::vector<std::string> cells = rowCells(r.out, mesh);
+        return cells.size() > 3 ? std::stod(cells[3]) : 0.0;
+    }();
+    ASSERT_GT(edges, 8.0) << r.out;
+    ASSERT_LT(edges, 16.0) << r.out;
+    std::size_t compared = 0;
+    for (const char* range : {"radii of 3–8 edges", "radii of 8–16 edges", "radii of over 16 edges"}) {
+        const std::vector<std::string> cells = rowCells(r.out, "  " + std::string(range));
+        ASSERT_EQ(cells.size(), 10u) << range << "\n" << r.out;
+        for (std::size_t c = 4; c < 8; ++c) {
+            double mean = -1, largest = -1;
+            if (std::string(range) == "radii of over 16 edges") {
+                EXPECT_NE(cells[c].find("–"), std::string::npos) << range << ": " << cells[c];
+                continue;
+            }
+            ASSERT_EQ(std::sscanf(cells[c].c_str(), " %lf / %lf", &mean, &largest), 2) << range << ": " << cells[c];
+            EXPECT_LE(mean, largest);
+            EXPECT_LE(largest, 2e-3) << range << " column " << c << ": " << cells[c];
+            ++compared;
+        }
+    }
+    EXPECT_EQ(compared, 8u);
+}
