@@ -231,6 +231,41 @@ TEST(MsiiCli, BadInputFailsCleanly)
     }
 }
 
+// --random-vertices draws among the vertices in a face: a scan's stray points (here more
+// than half of the vertices) have no values, so drawing one would refuse the whole run.
+TEST(MsiiCli, RandomVerticesAreDrawnAmongThoseInAFace)
+{
+    const fs::path dir = tempDir() / "random_vertices";
+    fs::create_directories(dir);
+    samples::HeightFieldOptions o;
+    o.kind = samples::HeightFieldKind::Plane;
+    o.width = 3;
+    o.height = 3;
+    o.spacing = 0.1;
+    TriMesh mesh = samples::makeHeightField(o);
+    const std::size_t inFaces = mesh.numVertices();
+    for (std::size_t k = 0; k < 2 * inFaces; ++k) mesh.points.push_back({0.01 * double(k), -1.0, 0.0});  // stray points
+    const fs::path in = dir / "strays.ply", out = dir / "strays.msii.ply";
+    writePly(in.string(), mesh, {});
+    const RunResult r = runMsii("compute '" + in.string() + "' --radius 0.5 --scales 2 --invariants P --exact "
+                                "--random-vertices 30 --quiet --overwrite --output '" + out.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    ReadMeshOptions ro;
+    ro.keepVertexProperties = true;
+    const ReadMeshResult e = readMesh(out.string(), ro);
+    std::size_t computed = 0;
+    for (std::size_t i = 0; i < e.mesh.numVertices(); ++i)
+        if (!std::isnan(e.vertexProperties[0].values[i])) {
+            EXPECT_LT(i, inFaces) << "a stray point got a value";
+            ++computed;
+        }
+    EXPECT_EQ(computed, 30u);
+    const RunResult tooMany = runMsii("compute '" + in.string() + "' --radius 0.5 --scales 2 --exact --random-vertices " +
+                                      std::to_string(inFaces + 1) + " --quiet --overwrite --output '" + out.string() + "'");
+    EXPECT_NE(tooMany.code, 0);
+    EXPECT_NE(tooMany.err.find("in a face"), std::string::npos) << tooMany.err;
+}
+
 // Selection, exact mode and GigaMesh files from the command line: the exact values at the
 // chosen vertices agree with the fast ones, the rest are NaN, and the GigaMesh files hold
 // V as 2x - 1 and P, radii largest first.

@@ -85,9 +85,11 @@ ComputeOptions computeOptionsOf(const ComputeArgs& args)
 namespace {
 
 /// The vertices of the exact mode: --vertices "3,17,42", or --random-vertices K (distinct,
-/// seeded, ascending), or all.
-std::vector<std::uint32_t> exactVertices(const ComputeArgs& args, std::size_t numVertices)
+/// seeded, ascending, among the vertices in a face: a scan's stray points have no values),
+/// or all.
+std::vector<std::uint32_t> exactVertices(const ComputeArgs& args, const TriMesh& mesh)
 {
+    const std::size_t numVertices = mesh.numVertices();
     std::vector<std::uint32_t> out;
     if (!args.vertices.empty()) {
         std::stringstream in(args.vertices);
@@ -113,15 +115,23 @@ std::vector<std::uint32_t> exactVertices(const ComputeArgs& args, std::size_t nu
         return out;
     }
     if (args.randomVertices > 0) {
-        if (args.randomVertices > numVertices)
+        std::vector<std::uint32_t> inFace;
+        {
+            std::vector<char> used(numVertices, 0);
+            for (const Triangle& t : mesh.triangles)
+                for (const std::uint32_t v : t) used[v] = 1;
+            for (std::uint32_t v = 0; v < numVertices; ++v)
+                if (used[v]) inFace.push_back(v);
+        }
+        if (args.randomVertices > inFace.size())
             throw InvalidInputError("--random-vertices " + std::to_string(args.randomVertices) +
-                                    " is more than the mesh's " + std::to_string(numVertices) +
-                                    " vertices");
+                                    " is more than the mesh's " + std::to_string(inFace.size()) +
+                                    " vertices in a face");
         std::mt19937_64 rng(args.seed);
-        std::vector<char> taken(numVertices, 0);
+        std::vector<char> taken(inFace.size(), 0);
         while (out.size() < args.randomVertices) {
-            const std::uint32_t v = std::uint32_t(rng() % numVertices);
-            if (!taken[v]) taken[v] = 1, out.push_back(v);
+            const std::size_t k = std::size_t(rng() % inFace.size());
+            if (!taken[k]) taken[k] = 1, out.push_back(inFace[k]);
         }
         std::sort(out.begin(), out.end());
     }
@@ -365,7 +375,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     if (!args.exact && (!args.vertices.empty() || args.randomVertices > 0))
         throw InvalidInputError("--vertices and --random-vertices go with --exact");
     if (args.exact) {
-        options.invariants.exactVertices = exactVertices(args, read.mesh.numVertices());
+        options.invariants.exactVertices = exactVertices(args, read.mesh);
         if (options.invariants.exactVertices.empty() && read.mesh.numVertices() > 20000 && !args.quiet)
             std::fprintf(stderr,
                          "msii: warning: %s: exact mode on all %zu vertices is slow; "
