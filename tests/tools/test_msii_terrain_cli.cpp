@@ -358,3 +358,74 @@ TEST(MsiiTerrain, RenderAndMapTakeTheGeoTiff)
     for (float m : map.channels.at("mask")) covered += m == 1.0f;
     EXPECT_GT(covered, std::size_t(map.width) * std::size_t(map.height) * 9 / 10);
 }
+
+// Only what is written is computed: the default bands (quality, then V at every radius) need
+// V alone, and the record says so; V's bands are those of a run that computes P as well,
+// bit for bit. quality comes first, so that a GIS opens the file on it.
+TEST(MsiiTerrain, ComputesOnlyWhatTheBandsNeedAndQualityComesFirst)
+{
+    const fs::path onlyV = tempDir() / "only_v.msii.tif", withP = tempDir() / "with_p.msii.tif";
+    const std::string common = "compute '" + demSample() + "' -r 5 -n 4 -q --overwrite ";
+    RunResult r = run(MSII_EXE, common + "--raster-output '" + onlyV.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::string record = readFile((tempDir() / "only_v.msii.json").string());
+    EXPECT_NE(record.find("\"invariants_computed\": [\n      \"V\"\n    ]"), std::string::npos) << record;
+    r = run(MSII_EXE, common + "--bands quality,V_01,V_02,V_03,V_04,P_04 --raster-output '" + withP.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::string info = gdalinfo(onlyV.string());
+    const std::size_t first = info.find("\"description\":\"", info.find("\"bands\":["));
+    ASSERT_NE(first, std::string::npos) << info;
+    EXPECT_EQ(info.compare(first, 23, "\"description\":\"quality\""), 0) << info.substr(first, 40);
+    // The bands' checksums, in band order: the five of onlyV are withP's first five.
+    const auto checksums = [](const std::string& path) {
+        const RunResult c = run("gdalinfo", "-checksum '" + path + "'");
+        std::vector<std::string> sums;
+        for (std::size_t at = c.out.find("Checksum="); at != std::string::npos; at = c.out.find("Checksum=", at + 1))
+            sums.push_back(c.out.substr(at, c.out.find('\n', at) - at));
+        return sums;
+    };
+    const std::vector<std::string> a = checksums(onlyV.string()), b = checksums(withP.string());
+    ASSERT_GE(a.size(), 5u);  // overviews may add more
+    ASSERT_GE(b.size(), 6u);
+    for (std::size_t band = 0; band < 5; ++band) EXPECT_EQ(a[band], b[band]) << "band " << band + 1;
+}
+
+// A DEM in degrees is refused with the command for its own UTM zone (from its centre), and
+// that command gives a DEM msii computes. Here at 15° E, 46° N: zone 33 north, EPSG:32633.
+TEST(MsiiTerrain, DegreesHintNamesTheUtmZoneOfTheDem)
+{
+    EXPECT_EQ(utmCrsFor(15.0, 46.0), "EPSG:32633");
+    EXPECT_EQ(utmCrsFor(-99.0, 31.0), "EPSG:32614");   // Texas
+    EXPECT_EQ(utmCrsFor(151.2, -33.9), "EPSG:32756");  // Sydney, south
+    EXPECT_EQ(utmCrsFor(179.9, 10.0), "EPSG:32660");
+    EXPECT_EQ(utmCrsFor(-180.0, 10.0), "EPSG:32601");
+    const std::string utm = (tempDir() / "zone33.tif").string(), degrees = (tempDir() / "zone33_deg.tif").string();
+    RunResult r = run(MSII_SAMPLES_EXE, "terrain --geotiff --width 60 --height 40 --spacing 1 --relief 3 --crs EPSG:32633 "
+                                        "--offset 500000,5094000,300 -q -o '" + utm + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = run("gdalwarp", "-q -t_srs EPSG:4326 '" + utm + "' '" + degrees + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    expectCleanFailure(degrees, "", "gdalwarp -t_srs EPSG:32633 -r bilinear zone33_deg.tif zone33_deg_utm.tif");
+    // The hint, followed word for word in the DEM's folder.
+    r = run("sh", "-c 'cd \"" + tempDir().string() + "\" && gdalwarp -q -t_srs EPSG:32633 -r bilinear zone33_deg.tif zone33_deg_utm.tif'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = run(MSII_EXE, "compute '" + (tempDir() / "zone33_deg_utm.tif").string() + "' -r 5 -n 4 -q --overwrite");
+    EXPECT_EQ(r.code, 0) << r.err;
+}
+
+// A raster without a coordinate system: the hint names a command that works for any format
+// (an ESRI ASCII grid here, for which gdal_edit.py writes an .aux.xml that GDAL ignores),
+// and names no system of its own that could mislabel the data.
+TEST(MsiiTerrain, NoCrsHintWorksForAsciiGrids)
+{
+    const std::string asc = (tempDir() / "nocrs.asc").string();
+    RunResult r = run("gdal_translate", "-q -of AAIGrid '" + demSample() + "' '" + asc + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    fs::remove(tempDir() / "nocrs.prj");
+    fs::remove(tempDir() / "nocrs.asc.aux.xml");
+    expectCleanFailure(asc, "", "gdal_translate -a_srs EPSG:<code> nocrs.asc nocrs_crs.tif");
+    r = run("sh", "-c 'cd \"" + tempDir().string() + "\" && gdal_translate -q -a_srs EPSG:25832 nocrs.asc nocrs_crs.tif'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = run(MSII_EXE, "compute '" + (tempDir() / "nocrs_crs.tif").string() + "' -r 5 -n 4 -q --overwrite");
+    EXPECT_EQ(r.code, 0) << r.err;
+}

@@ -78,6 +78,9 @@ OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, co
     j["output"] = fs::absolute(output).string();
     j["parameters"] = parametersRecord(args, result.plan, invariantLetters(options.compute.invariants.selected()),
                                        args.fillHoles >= 0 ? args.fillHoles : defaultMaxHolePerimeter(args.radius));
+    std::vector<std::string> computed;  // of those asked, the ones the bands need
+    for (const Invariant i : result.computed) computed.push_back(std::string(1, invariantLetter(i)));
+    j["parameters"]["invariants_computed"] = computed;
     j["raster"] = {{"width", grid.width},
                    {"height", grid.height},
                    {"geotransform", grid.transform},

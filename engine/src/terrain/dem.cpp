@@ -7,9 +7,13 @@
 #include <cpl_error.h>
 #include <ogr_spatialref.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
+#include <memory>
 #include <mutex>
+#include <optional>
 
 namespace msii {
 
@@ -51,7 +55,31 @@ namespace {
 
 std::string fileName(const std::string& path) { return std::filesystem::path(path).filename().string(); }
 
+/// The raster's centre in longitude and latitude (degrees), if its coordinate system can say.
+std::optional<std::array<double, 2>> centreInDegrees(GDALDataset& ds, const OGRSpatialReference& srs)
+{
+    std::array<double, 6> t{};
+    if (ds.GetGeoTransform(t.data()) != CE_None) return std::nullopt;
+    const double col = 0.5 * ds.GetRasterXSize(), row = 0.5 * ds.GetRasterYSize();
+    double x = t[0] + col * t[1] + row * t[2], y = t[3] + col * t[4] + row * t[5];
+    OGRSpatialReference wgs84;
+    wgs84.importFromEPSG(4326);
+    wgs84.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);  // longitude first
+    OGRSpatialReference from(srs);
+    from.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);   // as the geotransform is
+    std::unique_ptr<OGRCoordinateTransformation> to(OGRCreateCoordinateTransformation(&from, &wgs84));
+    if (!to || !to->Transform(1, &x, &y) || !std::isfinite(x) || !std::isfinite(y) || std::abs(y) > 90) return std::nullopt;
+    return std::array<double, 2>{x, y};
+}
+
 } // namespace
+
+std::string utmCrsFor(double longitude, double latitude)
+{
+    const double lon = std::remainder(longitude, 360.0);  // [-180, 180]
+    const int zone = std::clamp(int(std::floor((lon + 180.0) / 6.0)) + 1, 1, 60);
+    return "EPSG:" + std::to_string((latitude >= 0 ? 32600 : 32700) + zone);
+}
 
 std::string crsWkt(const std::string& definition)
 {
@@ -110,13 +138,23 @@ DemSource::DemSource(const std::string& path, const DemReadOptions& options) : m
     if (ds.GetGeoTransform(g.transform.data()) != CE_None)
         throw InvalidInputError(name + " has no georeferencing (no geotransform): msii needs the cells' positions");
     const OGRSpatialReference* srs = ds.GetSpatialRef();
-    if (!srs || srs->IsEmpty())
-        throw InvalidInputError(name + " has no coordinate system; assign it first, e.g. gdal_edit.py -a_srs EPSG:25832 " +
-                                name);
-    if (srs->IsGeographic())
-        throw InvalidInputError(name + " is in geographic coordinates (degrees), whose cells are not square on the "
-                                       "ground; reproject it to a projected system first, e.g. gdalwarp -t_srs "
-                                       "EPSG:25832 " + name + " projected.tif");
+    if (!srs || srs->IsEmpty()) {
+        // gdal_translate writes a GeoTIFF with the system whatever the format (gdal_edit.py
+        // only adds an .aux.xml, which GDAL ignores for some, e.g. ESRI ASCII grids). Which
+        // system is the data's to say: the hint names none that could mislabel it.
+        const std::string stem = std::filesystem::path(path).stem().string();
+        throw InvalidInputError(name + " has no coordinate system; assign the one its coordinates are in (the data's " +
+                                "documentation gives its EPSG code), e.g. gdal_translate -a_srs EPSG:<code> " + name +
+                                " " + stem + "_crs.tif");
+    }
+    if (srs->IsGeographic()) {
+        const std::string stem = std::filesystem::path(path).stem().string();
+        const std::optional<std::array<double, 2>> centre = centreInDegrees(ds, *srs);
+        const std::string target = centre ? utmCrsFor((*centre)[0], (*centre)[1]) : "EPSG:<UTM zone of the data>";
+        throw InvalidInputError(name + " is in geographic coordinates (degrees), whose cells are not square on the ground; " +
+                                "reproject it to a projected system first, e.g. to the UTM zone of its centre: gdalwarp " +
+                                "-t_srs " + target + " -r bilinear " + name + " " + stem + "_utm.tif");
+    }
     detail::describeCrs(*srs, g);
     const double det = g.transform[1] * g.transform[5] - g.transform[2] * g.transform[4];
     if (!(std::abs(det) > 0) || !std::isfinite(det)) throw InvalidInputError(name + " has a degenerate geotransform");

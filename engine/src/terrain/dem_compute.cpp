@@ -18,16 +18,44 @@ namespace {
 
 std::string fileName(const std::string& path) { return std::filesystem::path(path).filename().string(); }
 
-/// The features written: by name, or V at every radius (the first invariant computed) and quality.
+/// The features written: by name, or quality and V at every radius (the first invariant
+/// computed). quality first: GIS open a raster on its first band (QGIS on the first three as
+/// red, green and blue), and quality is the one to look at.
 std::vector<std::string> bandNames(const DemComputeOptions& options)
 {
     if (!options.bands.empty()) return options.bands;
     const InvariantsOptions& o = options.compute.invariants;
     const char letter = o.computeVolume ? 'V' : o.computeSphere ? 'S' : o.computePatch ? 'P' : 'L';
-    std::vector<std::string> names;
+    std::vector<std::string> names{"quality"};
     for (int j = 0; j < o.scales; ++j) names.push_back(featureName(letter, std::size_t(j)));
-    names.push_back("quality");
     return names;
+}
+
+/// @p options with only the invariants that @p bands need: those named (V_01 …), and for
+/// quality and valid_radii the one they come from (the first computed, V before S, P, L).
+/// The plan, and so every value written, does not depend on which are computed.
+DemComputeOptions onlyWhatIsWritten(const DemComputeOptions& options, const std::vector<std::string>& bands)
+{
+    const InvariantsOptions& o = options.compute.invariants;
+    const std::vector<Invariant> selected = o.selected();
+    bool need[4] = {false, false, false, false};
+    for (const std::string& name : bands) {
+        if (name == "quality" || name == "valid_radii") {
+            if (!selected.empty()) need[std::size_t(selected.front())] = true;
+            continue;
+        }
+        for (const Invariant i : selected)
+            if (name.size() > 2 && name[0] == invariantLetter(i) && name[1] == '_') need[std::size_t(i)] = true;
+    }
+    if (std::none_of(std::begin(need), std::end(need), [](bool b) { return b; }) && !selected.empty())
+        need[std::size_t(selected.front())] = true;  // height or filled_share alone: the cheapest run
+    DemComputeOptions run = options;
+    InvariantsOptions& r = run.compute.invariants;
+    r.computeVolume = o.computeVolume && need[std::size_t(Invariant::Volume)];
+    r.computeSphere = o.computeSphere && need[std::size_t(Invariant::Sphere)];
+    r.computePatch = o.computePatch && need[std::size_t(Invariant::Patch)];
+    r.computeLine = o.computeLine && need[std::size_t(Invariant::Line)];
+    return run;
 }
 
 /// Diagnostics of several windows as one list: counts summed, figures summed (areas) or the
@@ -352,10 +380,12 @@ std::vector<std::string> demBandNames(const ComputeOptions& options)
     return names;
 }
 
-DemComputeResult computeDem(const std::string& input, const std::string& output, const DemComputeOptions& options,
+DemComputeResult computeDem(const std::string& input, const std::string& output, const DemComputeOptions& asked,
                             RunContext* context)
 {
-    checkOptions(options);
+    checkOptions(asked);
+    const std::vector<std::string> bands = bandNames(asked);
+    const DemComputeOptions options = onlyWhatIsWritten(asked, bands);
     Stopwatch stage;
     DemComputeResult result;
     DemReadOptions ro;
@@ -368,7 +398,8 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
     result.haloCells = w.wideHalo, result.narrowHaloCells = w.narrowHalo, result.windowCells = w.side;
     result.windowsPerRow = (w.width + w.side - 1) / w.side;
     result.windowsPerColumn = (w.height + w.side - 1) / w.side;
-    result.bands = bandNames(options);
+    result.bands = bands;
+    result.computed = options.compute.invariants.selected();
     result.readSeconds += stage.seconds();
 
     RasterPieceWriter writer(output, result.input.georeference, result.bands, options.output);

@@ -73,6 +73,11 @@ Dem readDem(const std::string& path, const DemReadOptions& options = {});
 /// PROJ string). @throw InvalidInputError if GDAL does not.
 std::string crsWkt(const std::string& definition);
 
+/// The WGS 84 / UTM coordinate system of the zone holding (@p longitude, @p latitude), in
+/// degrees: "EPSG:326zz" north of the equator, "EPSG:327zz" south (zones of 6°, without the
+/// exceptions around Norway and Svalbard). For the hint to a DEM in degrees.
+std::string utmCrsFor(double longitude, double latitude);
+
 /// True if GDAL can open @p path as a raster (not a mesh format msii reads itself).
 bool isRasterFile(const std::string& path);
 

@@ -47,6 +47,9 @@ struct DemComputeResult {
     Dem input;                     ///< the raster's grid, band and counts (heights left empty)
     ScalePlan plan;
     std::vector<std::string> bands;          ///< as written
+    /// The invariants computed: of those asked, only the ones the bands need (V alone for
+    /// the default bands); the values written do not depend on the others.
+    std::vector<Invariant> computed;
     std::vector<Diagnostic> diagnostics;     ///< summed over the windows
     int windowsPerRow = 1, windowsPerColumn = 1, windowCells = 0;
     /// The halo: narrow (haloWidth) unless a nodata gap crosses its edge, then wide (plus
