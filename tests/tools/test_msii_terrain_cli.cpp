@@ -78,8 +78,9 @@ void expectCleanFailure(const std::string& input, const std::string& extra, cons
 } // namespace
 
 // The output is a GeoTIFF on the input's grid: same size, geotransform and coordinate
-// system, one named band per feature, NaN as nodata (read by GDAL's own gdalinfo), and a
-// Cloud-Optimized layout with overviews.
+// system, one named band per feature, nodata as GDAL's own gdalinfo reads it (NaN in
+// float32, 65535 in scaled 16-bit integers), and a Cloud-Optimized layout (with overviews
+// in float32).
 TEST(MsiiTerrain, GeoTiffOutIsGeoreferencedOnTheInputGrid)
 {
     const fs::path out = tempDir() / "dem.msii.tif";
@@ -92,8 +93,14 @@ TEST(MsiiTerrain, GeoTiffOutIsGeoreferencedOnTheInputGrid)
     for (const char* band : {"\"description\":\"quality\"", "\"description\":\"V_02\"", "\"description\":\"V_04\"",
                              "\"description\":\"S_04\""})
         EXPECT_NE(info.find(band), std::string::npos) << band;
-    EXPECT_NE(info.find("\"noDataValue\":\"NaN\""), std::string::npos);
+    EXPECT_NE(info.find("\"noDataValue\":65535"), std::string::npos) << info;
+    EXPECT_NE(info.find("\"scale\":0.0000152592"), std::string::npos) << info;
     EXPECT_NE(info.find("\"LAYOUT\":\"COG\""), std::string::npos);
+    const fs::path floats = tempDir() / "dem_f32.msii.tif";
+    const RunResult rf = run(MSII_EXE, "compute '" + demSample() + "' -r 5 -n 4 -q --overwrite --float32 "
+                                       "--raster-output '" + floats.string() + "'");
+    ASSERT_EQ(rf.code, 0) << rf.err;
+    EXPECT_NE(gdalinfo(floats.string()).find("\"noDataValue\":\"NaN\""), std::string::npos);
     // Overviews come with rasters larger than a tile (512 cells).
     const std::string large = (tempDir() / "large.tif").string();
     RasterGeoreference g;
@@ -365,7 +372,7 @@ TEST(MsiiTerrain, RenderAndMapTakeTheGeoTiff)
 TEST(MsiiTerrain, ComputesOnlyWhatTheBandsNeedAndQualityComesFirst)
 {
     const fs::path onlyV = tempDir() / "only_v.msii.tif", withP = tempDir() / "with_p.msii.tif";
-    const std::string common = "compute '" + demSample() + "' -r 5 -n 4 -q --overwrite ";
+    const std::string common = "compute '" + demSample() + "' -r 5 -n 4 -q --overwrite --float32 ";
     RunResult r = run(MSII_EXE, common + "--raster-output '" + onlyV.string() + "'");
     ASSERT_EQ(r.code, 0) << r.err;
     const std::string record = readFile((tempDir() / "only_v.msii.json").string());
@@ -428,4 +435,47 @@ TEST(MsiiTerrain, NoCrsHintWorksForAsciiGrids)
     ASSERT_EQ(r.code, 0) << r.err;
     r = run(MSII_EXE, "compute '" + (tempDir() / "nocrs_crs.tif").string() + "' -r 5 -n 4 -q --overwrite");
     EXPECT_EQ(r.code, 0) << r.err;
+}
+
+// The default bands (fractions in [0, 1]) are written as 16-bit integers with GDAL's scale:
+// within 7.7e-6 of the float32 values (--float32), NaN where they are NaN, and smaller
+// (how much depends on the data: docs/terrain.md); a band that is no fraction (height)
+// keeps float32.
+TEST(MsiiTerrain, FractionsAreWrittenAsScaledIntegers)
+{
+    const fs::path scaled = tempDir() / "scaled.msii.tif", floats = tempDir() / "floats.msii.tif",
+                   mixed = tempDir() / "mixed.msii.tif";
+    const std::string common = "compute '" + demSample() + "' -r 5 -n 8 -q --overwrite ";
+    RunResult r = run(MSII_EXE, common + "--raster-output '" + scaled.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = run(MSII_EXE, common + "--float32 --raster-output '" + floats.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = run(MSII_EXE, common + "--bands quality,height --raster-output '" + mixed.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(gdalinfo(scaled.string()).find("\"type\":\"UInt16\""), std::string::npos);
+    EXPECT_NE(gdalinfo(floats.string()).find("\"type\":\"Float32\""), std::string::npos);
+    EXPECT_NE(gdalinfo(mixed.string()).find("\"type\":\"Float32\""), std::string::npos);
+    EXPECT_NE(readFile((tempDir() / "scaled.msii.json").string()).find("\"values\": \"uint16"), std::string::npos);
+    const RasterImage a = readRaster(scaled.string()), b = readRaster(floats.string());
+    ASSERT_EQ(a.bands.size(), 9u);
+    ASSERT_EQ(b.bands.size(), a.bands.size());
+    std::size_t compared = 0, nan = 0;
+    double largest = 0;
+    for (std::size_t k = 0; k < a.bands.size(); ++k) {
+        EXPECT_EQ(a.bands[k].name, b.bands[k].name);
+        for (std::size_t c = 0; c < a.bands[k].values.size(); ++c) {
+            const float x = a.bands[k].values[c], y = b.bands[k].values[c];
+            ASSERT_EQ(std::isnan(x), std::isnan(y)) << a.bands[k].name << " cell " << c;
+            if (std::isnan(x)) {
+                ++nan;
+                continue;
+            }
+            largest = std::max(largest, double(std::abs(x - y)));
+            ++compared;
+        }
+    }
+    EXPECT_GT(compared, 9u * 10000u);
+    EXPECT_GT(nan, 0u);  // the sample's nodata patches
+    EXPECT_LE(largest, 7.7e-6);
+    EXPECT_LT(double(fs::file_size(scaled)), 0.8 * double(fs::file_size(floats)));
 }

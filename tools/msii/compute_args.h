@@ -47,6 +47,7 @@ struct ComputeArgs : CommonArgs {
     std::string bands;          // features written as bands (default V at every radius and quality)
     int band = 0;               // the input's height band (0: the only one)
     int windowCells = 0;        // own cells per window side (0: from the memory budget)
+    bool float32 = false;       // float32 raster bands even where scaled 16-bit integers hold them
 };
 
 /// What one input gave, for the summary and the manifest.

@@ -430,11 +430,15 @@ std::function<int()> addComputeCommand(CLI::App& app)
                     "msii merge joins the parts");
     cmd->add_option("--raster-output", args->rasterOutput,
                     "Raster (DEM) inputs: the output GeoTIFF (default <input stem>.msii.tif): a Cloud-Optimized "
-                    "GeoTIFF on the input's grid, one float32 band per feature")
+                    "GeoTIFF on the input's grid, one band per feature: 16-bit integers scaled to 1.5e-5 when every "
+                    "band is a fraction in [0, 1] (V, S, their quality, filled_share), else float32")
         ->group("Terrain (DEM rasters)");
     cmd->add_option("--bands", args->bands,
                     "Raster inputs: the features written as bands, comma-separated, e.g. quality,V_04,V_16,S_16 "
-                    "(default: V at every radius and quality)")
+                    "(default: quality and V at every radius); only the invariants they need are computed")
+        ->group("Terrain (DEM rasters)");
+    cmd->add_flag("--float32", args->float32,
+                  "Raster inputs: float32 bands even where 16-bit scaled integers would hold them (3 times the size)")
         ->group("Terrain (DEM rasters)");
     cmd->add_option("--band", args->band, "Raster inputs: the height band of a multi-band raster (1, 2, ...)")
         ->group("Terrain (DEM rasters)");

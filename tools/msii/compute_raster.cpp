@@ -44,6 +44,7 @@ OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, co
     checkOutputs({output, sidecar}, args.overwrite);
     options.band = args.band;
     options.windowCells = args.windowCells;
+    options.float32 = args.float32;
     std::ostringstream description;
     description << "msii " << versionString() << " compute R=" << args.radius << " N=" << args.scales << " of "
                 << fs::path(input).filename().string() << "; " << featureLegend()
@@ -90,6 +91,7 @@ OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, co
                    {"cells_with_height", result.input.numValid},
                    {"nodata_cells", std::size_t(grid.width) * std::size_t(grid.height) - result.input.numValid},
                    {"bands", result.bands},
+                   {"values", result.scaled16 ? "uint16, scale 1/65534 (1.5e-5), nodata 65535" : "float32, nodata NaN"},
                    {"windows", {{"per_row", result.windowsPerRow}, {"per_column", result.windowsPerColumn},
                                 {"cells", result.windowCells}, {"halo_cells", result.haloCells},
                                 {"narrow_halo_cells", result.narrowHaloCells},

@@ -187,9 +187,18 @@ Dem DemSource::read(int col0, int row0, int cols, int rows) const
  throw IOError("cannot read the heights of '" + mImpl->path + "': " + detail::lastGdalError("read error"));
     const float nan = std::numeric_limits<float>::quiet_NaN();
     const float nodata = float(mImpl->nodata);
+    // Heights stored as scaled integers (e.g. centimetres in Int16 with a scale of 0.01):
+    // GDAL's scale and offset give metres; nodata is compared before scaling.
+    int hasScale = 0, hasOffset = 0;
+    GDALRasterBand* band = mImpl->dataset->GetRasterBand(mInfo.band);
+    const double scale = band->GetScale(&hasScale), offset = band->GetOffset(&hasOffset);
+    const bool scaled = (hasScale && scale != 1.0) || (hasOffset && offset != 0.0);
     for (float& h : dem.heights) {
         if (!std::isfinite(h) || (mImpl->hasNodata && h == nodata)) h = nan;
-        else ++dem.numValid;
+        else {
+            if (scaled) h = float(double(h) * scale + offset);
+            ++dem.numValid;
+        }
     }
     return dem;
 }

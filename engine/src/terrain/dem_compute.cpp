@@ -58,6 +58,19 @@ DemComputeOptions onlyWhatIsWritten(const DemComputeOptions& options, const std:
     return run;
 }
 
+/// Whether every one of @p bands is a fraction in [0, 1] (V̂, Ŝ, filled_share, and quality
+/// when it comes from V or S), so that scaled 16-bit integers hold it to 1.5e-5.
+bool allFractions(const std::vector<std::string>& bands, const InvariantsOptions& invariants)
+{
+    const std::vector<Invariant> selected = invariants.selected();
+    const bool qualityIsFraction = !selected.empty() && (selected.front() == Invariant::Volume ||
+                                                         selected.front() == Invariant::Sphere);
+    return std::all_of(bands.begin(), bands.end(), [&](const std::string& name) {
+        if (name == "quality") return qualityIsFraction;
+        return name == "filled_share" || name.rfind("V_", 0) == 0 || name.rfind("S_", 0) == 0;
+    });
+}
+
 /// Diagnostics of several windows as one list: counts summed, figures summed (areas) or the
 /// largest (perimeters, shares), the sentence of the window with the most.
 class DiagnosticSum {
@@ -385,7 +398,8 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
 {
     checkOptions(asked);
     const std::vector<std::string> bands = bandNames(asked);
-    const DemComputeOptions options = onlyWhatIsWritten(asked, bands);
+    DemComputeOptions options = onlyWhatIsWritten(asked, bands);
+    options.output.scaled16 = !asked.float32 && allFractions(bands, asked.compute.invariants);
     Stopwatch stage;
     DemComputeResult result;
     DemReadOptions ro;
@@ -400,6 +414,7 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
     result.windowsPerColumn = (w.height + w.side - 1) / w.side;
     result.bands = bands;
     result.computed = options.compute.invariants.selected();
+    result.scaled16 = options.output.scaled16;
     result.readSeconds += stage.seconds();
 
     RasterPieceWriter writer(output, result.input.georeference, result.bands, options.output);

@@ -1,5 +1,9 @@
 #include <msii/terrain/raster_output.h>
 
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+
 #include "gdal_support.h"
 
 #include <msii/core/errors.h>
@@ -8,21 +12,28 @@
 #include <cpl_string.h>
 #include <ogr_spatialref.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 
 namespace msii {
 
 namespace {
 
-CPLStringList cogCreationOptions()
+CPLStringList cogCreationOptions(bool scaled16)
 {
-    // Cloud-Optimized GeoTIFF: 512-cell tiles, DEFLATE with the floating-point predictor,
-    // overviews down to a tile (AUTO), all cores.
+    // Cloud-Optimized GeoTIFF: 512-cell tiles, all cores. Floats: DEFLATE with the
+    // floating-point predictor, overviews down to a tile (AUTO). Scaled integers: ZSTD with
+    // the horizontal predictor and no overviews: on a DEM's default bands 0.28 of the float
+    // file's size, against 0.36 with overviews (which a GIS builds when it needs them, and
+    // which a mosaic of tiles does not use) and 0.32 at ZSTD level 15 for 9 times the
+    // writing time (docs/terrain.md, Output size).
     CPLStringList o;
-    o.SetNameValue("COMPRESS", "DEFLATE");
-    o.SetNameValue("PREDICTOR", "FLOATING_POINT");
+    o.SetNameValue("COMPRESS", scaled16 ? "ZSTD" : "DEFLATE");
+    o.SetNameValue("PREDICTOR", "YES");
     o.SetNameValue("BLOCKSIZE", "512");
-    o.SetNameValue("OVERVIEWS", "AUTO");
+    o.SetNameValue("OVERVIEWS", scaled16 ? "NONE" : "AUTO");
     o.SetNameValue("NUM_THREADS", "ALL_CPUS");
     o.SetNameValue("BIGTIFF", "IF_SAFER");
     return o;
@@ -62,7 +73,7 @@ RasterPieceWriter::RasterPieceWriter(const std::string& path, const RasterGeoref
     o.SetNameValue("INTERLEAVE", "BAND");
     CPLErrorReset();
     m.dataset.reset(gtiff->Create(m.intermediate->temporaryPath().c_str(), grid.width, grid.height,
-                                  int(bandNames.size()), GDT_Float32, o.List()));
+                                  int(bandNames.size()), options.scaled16 ? GDT_UInt16 : GDT_Float32, o.List()));
     if (!m.dataset) throw IOError("cannot write '" + path + "': " + detail::lastGdalError("write error"));
     std::array<double, 6> transform = grid.transform;
     m.dataset->SetGeoTransform(transform.data());
@@ -72,7 +83,13 @@ RasterPieceWriter::RasterPieceWriter(const std::string& path, const RasterGeoref
     for (std::size_t k = 0; k < bandNames.size(); ++k) {
         GDALRasterBand* band = m.dataset->GetRasterBand(int(k) + 1);
         band->SetDescription(bandNames[k].c_str());
-        band->SetNoDataValue(options.nodata);
+        if (options.scaled16) {
+            band->SetNoDataValue(kScaled16Nodata);
+            band->SetScale(kScaled16Step);
+            band->SetOffset(0.0);
+        } else {
+            band->SetNoDataValue(options.nodata);
+        }
     }
 }
 
@@ -82,6 +99,17 @@ void RasterPieceWriter::write(int band, int col0, int row0, int cols, int rows, 
 {
     Impl& m = *mImpl;
     if (!m.dataset) throw IOError("the raster '" + m.path + "' is closed");
+    if (m.options.scaled16) {
+        std::vector<std::uint16_t> raw(std::size_t(cols) * std::size_t(rows));
+        for (std::size_t k = 0; k < raw.size(); ++k)
+            raw[k] = std::isnan(values[k]) ? std::uint16_t(kScaled16Nodata)
+                                           : std::uint16_t(std::clamp(std::lround(double(values[k]) / kScaled16Step), 0L,
+                                                                      long(kScaled16Nodata) - 1));
+        if (m.dataset->GetRasterBand(band + 1)->RasterIO(GF_Write, col0, row0, cols, rows, raw.data(), cols, rows,
+                                                         GDT_UInt16, 0, 0, nullptr) != CE_None)
+            throw IOError("cannot write '" + m.path + "': " + detail::lastGdalError("write error"));
+        return;
+    }
     std::vector<float> copy;
     if (!std::isnan(m.options.nodata)) {
         copy.assign(values, values + std::size_t(cols) * std::size_t(rows));
@@ -101,7 +129,7 @@ void RasterPieceWriter::commit()
     if (!cog) throw IOError("GDAL lacks its COG driver");
     m.dataset->FlushCache();
     m.target = std::make_unique<AtomicFile>(m.path);
-    const CPLStringList o = cogCreationOptions();
+    const CPLStringList o = cogCreationOptions(m.options.scaled16);
     CPLErrorReset();
     detail::GdalDataset written(
         cog->CreateCopy(m.target->temporaryPath().c_str(), m.dataset.get(), FALSE, o.List(), nullptr, nullptr));
@@ -158,7 +186,16 @@ RasterImage readRaster(const std::string& path)
                            nullptr) != CE_None)
             throw IOError("cannot read band " + std::to_string(k) + " of '" + path + "'");
         int has = 0;
-        const double nodata = band->GetNoDataValue(&has);
+        double nodata = band->GetNoDataValue(&has);
+        int hasScale = 0, hasOffset = 0;
+        const double scale = band->GetScale(&hasScale), offset = band->GetOffset(&hasOffset);
+        if ((hasScale && scale != 1.0) || (hasOffset && offset != 0.0)) {
+            // Stored as scaled integers (e.g. msii's scaled16): the values, nodata as NaN.
+            for (float& v : b.values)
+                v = has && double(v) == nodata ? std::numeric_limits<float>::quiet_NaN()
+                                               : float(double(v) * scale + offset);
+            nodata = std::numeric_limits<double>::quiet_NaN();
+        }
         if (k == 1) image.hasNodata = has != 0, image.nodata = nodata;
         image.bands.push_back(std::move(b));
     }

@@ -36,6 +36,10 @@ struct DemComputeOptions {
     std::vector<std::string> bands;
     /// Own cells per window side; 0 = from the memory budget.
     int windowCells = 0;
+    /// Float32 bands even where every band is a fraction in [0, 1] (V̂, Ŝ, their quality,
+    /// filled_share), which are otherwise written as scaled 16-bit integers
+    /// (RasterOutputOptions::scaled16: a resolution of 1.5e-5, a third of the size).
+    bool float32 = false;
     RasterOutputOptions output;     ///< description and metadata of the output raster
 };
 
@@ -50,6 +54,7 @@ struct DemComputeResult {
     /// The invariants computed: of those asked, only the ones the bands need (V alone for
     /// the default bands); the values written do not depend on the others.
     std::vector<Invariant> computed;
+    bool scaled16 = false;                   ///< written as scaled 16-bit integers
     std::vector<Diagnostic> diagnostics;     ///< summed over the windows
     int windowsPerRow = 1, windowsPerColumn = 1, windowCells = 0;
     /// The halo: narrow (haloWidth) unless a nodata gap crosses its edge, then wide (plus
