@@ -479,3 +479,63 @@ TEST(MsiiTerrain, FractionsAreWrittenAsScaledIntegers)
     EXPECT_LE(largest, 7.7e-6);
     EXPECT_LT(double(fs::file_size(scaled)), 0.8 * double(fs::file_size(floats)));
 }
+
+// One job per source tile of a mosaic: --tile-of-mosaic computes a tile's cells on its own
+// grid, `msii merge` joins the tiles into a VRT with the band names and scale, equal to the
+// mosaic computed in one piece (checksums of every band); a tile's output finds its DEM
+// again relative to itself (render --shade) after the folder has moved.
+TEST(MsiiTerrain, TilesOfAMosaicJoinedEqualOnePiece)
+{
+    const fs::path dir = tempDir() / "mosaic";
+    fs::create_directories(dir / "parts");
+    const std::string d = "'" + dir.string() + "/";
+    struct Cut { int c0, r0, cols, rows; };
+    const Cut cuts[4] = {{0, 0, 70, 50}, {70, 0, 90, 50}, {0, 50, 85, 70}, {85, 50, 75, 70}};
+    std::string sources;
+    for (int k = 0; k < 4; ++k) {
+        const Cut& c = cuts[k];
+        const RunResult r = run("gdal_translate", "-q -srcwin " + std::to_string(c.c0) + " " + std::to_string(c.r0) + " " +
+                                                      std::to_string(c.cols) + " " + std::to_string(c.rows) + " '" +
+                                                      demSample() + "' " + d + "t" + std::to_string(k + 1) + ".tif'");
+        ASSERT_EQ(r.code, 0) << r.err;
+        sources += " " + d + "t" + std::to_string(k + 1) + ".tif'";
+    }
+    RunResult r = run("gdalbuildvrt", "-q " + d + "mosaic.vrt'" + sources);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::string common = " -r 5 -n 4 -q --overwrite ";
+    r = run(MSII_EXE, "compute " + d + "mosaic.vrt'" + common + "--raster-output " + d + "whole.msii.tif'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    std::string parts;
+    for (int k = 1; k <= 4; ++k) {
+        r = run(MSII_EXE, "compute " + d + "mosaic.vrt'" + common + "--tile-of-mosaic t" + std::to_string(k) +
+                              " --output-dir " + d + "parts'");
+        ASSERT_EQ(r.code, 0) << r.err;
+        parts += " " + d + "parts/t" + std::to_string(k) + ".msii.tif'";
+    }
+    r = run(MSII_EXE, "merge" + parts + " -q -o " + d + "joined.msii.vrt'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto checksums = [](const fs::path& path) {
+        const RunResult c = run("gdalinfo", "-checksum '" + path.string() + "'");
+        std::vector<std::string> sums;
+        for (std::size_t at = c.out.find("Checksum="); at != std::string::npos; at = c.out.find("Checksum=", at + 1))
+            sums.push_back(c.out.substr(at, c.out.find('\n', at) - at));
+        return sums;
+    };
+    const std::vector<std::string> whole = checksums(dir / "whole.msii.tif"), joined = checksums(dir / "joined.msii.vrt");
+    ASSERT_EQ(whole.size(), 5u);
+    EXPECT_EQ(joined, whole);
+    const std::string info = gdalinfo((dir / "joined.msii.vrt").string());
+    EXPECT_NE(info.find("\"description\":\"quality\""), std::string::npos);
+    EXPECT_NE(info.find("\"scale\":0.0000152592"), std::string::npos);
+    EXPECT_NE(readFile((dir / "parts" / "t2.msii.json").string()).find("\"tile_of_mosaic\""), std::string::npos);
+    // Moved with its DEM: the part finds the mosaic's heights under its own cells.
+    const fs::path moved = tempDir() / "mosaic-moved";
+    fs::rename(dir, moved);
+    r = run(MSII_EXE, "render '" + (moved / "parts" / "t2.msii.tif").string() + "' --shade -q -o '" +
+                          (moved / "t2.png").string() + "'");
+    EXPECT_EQ(r.code, 0) << r.err;
+    // A tile that is not the mosaic's is refused.
+    r = run(MSII_EXE, "compute '" + (moved / "mosaic.vrt").string() + "'" + common + "--tile-of-mosaic t9");
+    EXPECT_NE(r.code, 0);
+    EXPECT_NE(r.err.find("none of the files"), std::string::npos) << r.err;
+}

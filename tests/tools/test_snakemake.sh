@@ -64,6 +64,34 @@ snakemake --snakefile "$snakefile" --cores 2 -q --config scans=scans results=res
 cmp -s results-mask/a.msii.ply direct-mask-a.ply || fail "a: border=mask differs from msii compute --border mask"
 cmp -s results-mask/a.msii.ply direct-a.ply && fail "a: border=mask gave the continued values"
 
+# A DEM mosaic of 4 unequal tiles: one job per tile (mosaic=VRT, and dem_tiles=FOLDER through
+# a VRT the workflow builds), joined into a VRT equal to the mosaic computed in one piece.
+mkdir tiles
+"$samples" terrain --geotiff --width 30 --height 22 --spacing 0.25 --relief 1 --holes 2 -o whole-dem.tif -q
+gdal_translate -q -srcwin 0 0 50 40 whole-dem.tif tiles/t1.tif
+gdal_translate -q -srcwin 50 0 70 40 whole-dem.tif tiles/t2.tif
+gdal_translate -q -srcwin 0 40 65 48 whole-dem.tif tiles/t3.tif
+gdal_translate -q -srcwin 65 40 55 48 whole-dem.tif tiles/t4.tif
+gdalbuildvrt -q mosaic.vrt tiles/t1.tif tiles/t2.tif tiles/t3.tif tiles/t4.tif
+"$msii" compute mosaic.vrt --radius 1.5 --scales 4 --quiet --raster-output one-piece.tif
+checksums() { gdalinfo -checksum "$1" | grep Checksum | tr -d ' \n'; }
+for mode in "mosaic=mosaic.vrt" "dem_tiles=tiles"; do
+  rm -rf results-mosaic
+  snakemake --snakefile "$snakefile" --cores 2 -q --config $mode results=results-mosaic radius=1.5 scales=4 \
+    msii="$msii" > log7.txt 2>&1 || { cat log7.txt; fail "the mosaic workflow ($mode) failed"; }
+  name=$( [ "$mode" = "mosaic=mosaic.vrt" ] && echo mosaic || echo tiles )
+  for t in t1 t2 t3 t4; do [ -s results-mosaic/$name/$t.msii.tif ] || fail "$mode: missing tile $t"; done
+  [ "$(checksums results-mosaic/$name.msii.vrt)" = "$(checksums one-piece.tif)" ] \
+    || fail "$mode: the joined tiles differ from the mosaic computed in one piece"
+  snakemake --snakefile "$snakefile" --cores 2 --config $mode results=results-mosaic radius=1.5 scales=4 \
+    msii="$msii" > log8.txt 2>&1 || { cat log8.txt; fail "the mosaic rerun failed"; }
+  grep -q "Nothing to be done" log8.txt || { cat log8.txt; fail "$mode: the rerun did work again"; }
+done
+snakemake --snakefile "$snakefile" --slurm --jobs 10 --default-resources slurm_partition=main runtime=60 -n \
+  --config mosaic=mosaic.vrt results=results-mosaic-slurm radius=1.5 scales=4 msii="$msii" > log9.txt 2>&1 \
+  || { cat log9.txt; fail "the mosaic's Slurm dry run failed"; }
+[ "$(grep -c '^rule mosaic_tile:' log9.txt)" -eq 4 ] || { cat log9.txt; fail "the Slurm dry run should plan one job per tile"; }
+
 # Ready for a cluster: the same workflow plans its jobs for Slurm (dry run).
 snakemake --snakefile "$snakefile" --slurm --jobs 10 --default-resources slurm_partition=main runtime=60 -n \
   --config scans=scans results=results-slurm radius=0.6 scales=4 msii="$msii" > log4.txt 2>&1 \

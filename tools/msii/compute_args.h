@@ -48,6 +48,7 @@ struct ComputeArgs : CommonArgs {
     int band = 0;               // the input's height band (0: the only one)
     int windowCells = 0;        // own cells per window side (0: from the memory budget)
     bool float32 = false;       // float32 raster bands even where scaled 16-bit integers hold them
+    std::string tileOfMosaic;   // the source tile of a mosaic whose cells alone are computed
 };
 
 /// What one input gave, for the summary and the manifest.

@@ -308,7 +308,10 @@ std::string outputPathFor(const ComputeArgs& args, const std::string& input)
     if (!args.output.empty()) return args.output;
     const fs::path in(input);
     const fs::path dir = args.outputDir.empty() ? in.parent_path() : fs::path(args.outputDir);
-    return (dir / (in.stem().string() + (raster ? ".msii.tif" : ".msii.ply"))).string();
+    // One part of a mosaic: named after the part, so that the parts' outputs do not collide.
+    const std::string stem = raster && !args.tileOfMosaic.empty() ? fs::path(args.tileOfMosaic).stem().string()
+                                                                  : in.stem().string();
+    return (dir / (stem + (raster ? ".msii.tif" : ".msii.ply"))).string();
 }
 
 std::string sidecarPathFor(const std::string& plyPath)
@@ -357,6 +360,7 @@ bool isRasterInput(const std::string& input)
 OneResult computeOne(const ComputeArgs& args, const std::string& input, const std::string& output)
 {
     if (isRasterInput(input)) return computeRasterOne(args, input, output);
+    if (!args.tileOfMosaic.empty()) throw InvalidInputError("--tile-of-mosaic is for raster mosaics (VRT), not meshes");
     const Stopwatch total;
     ComputeOptions options = computeOptionsOf(args);
     if (args.gigamesh && !options.invariants.computeVolume && !options.invariants.computePatch)
@@ -436,6 +440,12 @@ std::function<int()> addComputeCommand(CLI::App& app)
     cmd->add_option("--bands", args->bands,
                     "Raster inputs: the features written as bands, comma-separated, e.g. quality,V_04,V_16,S_16 "
                     "(default: quality and V at every radius); only the invariants they need are computed")
+        ->group("Terrain (DEM rasters)");
+    cmd->add_option("--tile-of-mosaic", args->tileOfMosaic,
+                    "Raster inputs: compute only the cells of this source tile of the mosaic (a VRT's file, by path, "
+                    "name or stem), reading the mosaic around it as far as its values depend on; writes "
+                    "<tile>.msii.tif on the tile's grid. The tiles' outputs joined (gdalbuildvrt) equal the mosaic "
+                    "computed in one piece, bit for bit: one job per tile on a cluster")
         ->group("Terrain (DEM rasters)");
     cmd->add_flag("--float32", args->float32,
                   "Raster inputs: float32 bands even where 16-bit scaled integers would hold them (3 times the size)")

@@ -45,6 +45,7 @@ OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, co
     options.band = args.band;
     options.windowCells = args.windowCells;
     options.float32 = args.float32;
+    if (!args.tileOfMosaic.empty()) options.region = regionOfPart(input, args.tileOfMosaic);
     std::ostringstream description;
     description << "msii " << versionString() << " compute R=" << args.radius << " N=" << args.scales << " of "
                 << fs::path(input).filename().string() << "; " << featureLegend()
@@ -55,7 +56,8 @@ OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, co
     for (int j = 1; j <= args.scales; ++j) radii << (j > 1 ? "," : "") << args.radius * j / args.scales;
     options.output.metadata = {{"MSII_RADII", radii.str()},
                                {"MSII_VERSION", versionString()},
-                               {"MSII_INPUT", fs::absolute(input).string()}};
+                               // Relative to the output's folder: found again when both move together.
+                               {"MSII_INPUT", fs::absolute(input).lexically_relative(fs::absolute(output).parent_path()).string()}};
 
     TerminalProgress terminal(!args.quiet && stderrIsTerminal());
     RunContext progress(terminal.listener());
@@ -96,6 +98,12 @@ OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, co
                                 {"cells", result.windowCells}, {"halo_cells", result.haloCells},
                                 {"narrow_halo_cells", result.narrowHaloCells},
                                 {"windows_with_wide_halo", result.wideHaloWindows}}}};
+    if (options.region.cols > 0)
+        j["raster"]["tile_of_mosaic"] = {{"tile", args.tileOfMosaic},
+                                         {"col", options.region.col},
+                                         {"row", options.region.row},
+                                         {"cols", options.region.cols},
+                                         {"rows", options.region.rows}};
     j["mesh"] = {{"triangles", result.triangles},
                  {"masked_values", result.masked.total()},
                  {"cells_with_filled_share", result.masked.withFilledShare}};

@@ -11,6 +11,7 @@
 #include "compute_args.h"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
@@ -55,15 +56,26 @@ RasterInput readRasterInput(const std::string& path, bool needHeights)
         if (b.name == "height") in.heights = b.values;
     if (in.heights.empty() && in.raster.bands.size() == 1) in.heights = in.raster.bands.front().values;
     if (in.heights.empty() && needHeights)  // msii compute's GeoTIFFs name their DEM
-        for (const auto& [key, file] : in.raster.metadata)
-            if (key == "MSII_INPUT" && std::filesystem::exists(file)) {
-                RasterImage source = readRaster(file);
-                const RasterGeoreference& s = source.georeference;
-                if (s.width == g.width && s.height == g.height && s.transform == g.transform && !source.bands.empty()) {
-                    nodataAsNaN(source);
-                    in.heights = std::move(source.bands.front().values);
-                }
-            }
+        for (const auto& [key, named] : in.raster.metadata) {
+            if (key != "MSII_INPUT") continue;
+            // Relative to the GeoTIFF's folder (absolute in files of earlier versions).
+            const std::filesystem::path file = std::filesystem::path(named).is_absolute()
+                                                   ? std::filesystem::path(named)
+                                                   : std::filesystem::path(path).parent_path() / named;
+            if (!std::filesystem::exists(file)) continue;
+            // The DEM's cells under the GeoTIFF's: all of them, or one tile's of a mosaic.
+            const DemSource source(file.string(), {});
+            const RasterGeoreference& s = source.info().georeference;
+            const std::array<double, 6>& t = s.transform;
+            if (t[1] != g.transform[1] || t[5] != g.transform[5] || t[2] != g.transform[2] || t[4] != g.transform[4])
+                continue;
+            const double col = (g.transform[0] - t[0]) / t[1], row = (g.transform[3] - t[3]) / t[5];
+            const int c = int(std::lround(col)), r = int(std::lround(row));
+            if (std::abs(col - c) > 1e-6 || std::abs(row - r) > 1e-6 || c < 0 || r < 0 || c + g.width > s.width ||
+                r + g.height > s.height)
+                continue;
+            in.heights = source.read(c, r, g.width, g.height).heights;
+        }
     return in;
 }
 

@@ -7,9 +7,12 @@
 #include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
 #include <msii/io/write_ply.h>
+#include <msii/terrain/raster_output.h>
 #include <msii/tiling/tiled_compute.h>
 
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <cmath>
 #include <regex>
@@ -24,8 +27,34 @@ struct MergeArgs : CommonArgs {
     std::string output;
 };
 
+/// Whether @p path is a raster (a part written by `msii compute --tile-of-mosaic`).
+bool isRasterPart(const std::string& path)
+{
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return ext == ".tif" || ext == ".tiff";
+}
+
+/// The parts of a mosaic joined into a VRT (docs/terrain.md, Mosaics on a cluster).
+int mergeRasterParts(const MergeArgs& args)
+{
+    const Stopwatch total;
+    const std::string output = args.output.empty()
+                                   ? (std::filesystem::path(args.parts.front()).parent_path() / "mosaic.msii.vrt").string()
+                                   : args.output;
+    if (std::filesystem::exists(output) && !args.overwrite)
+        throw InvalidInputError("'" + output + "' exists already (use --overwrite to replace it)");
+    for (const std::string& part : args.parts)
+        if (!isRasterPart(part)) throw InvalidInputError(part + " is not a GeoTIFF: give the parts of one mosaic");
+    joinRasterParts(args.parts, output);
+    if (!args.quiet)
+        std::fprintf(stderr, "msii: %zu parts -> %s (%.1f s)\n", args.parts.size(), output.c_str(), total.seconds());
+    return 0;
+}
+
 int runMerge(const MergeArgs& args)
 {
+    if (isRasterPart(args.parts.front())) return mergeRasterParts(args);
     const Stopwatch total;
     const std::string output = outputPath(args.parts.front(), args.output, "merged", args.overwrite);
     static const std::regex tileLine(R"(^msii tile ([0-9]+) of ([0-9]+) x ([0-9]+))");
@@ -107,8 +136,13 @@ std::function<int()> addMergeCommand(CLI::App& app)
     CLI::App* cmd = app.add_subcommand(
         "merge", "Join the tiles of one mesh computed separately (msii compute --tiles K --tile I) into "
                  "the whole result, equal to computing it in one piece.");
-    cmd->add_option("parts", args->parts, "The tiles' PLY files (any order)")->required();
-    cmd->add_option("-o,--output", args->output, "Output PLY (default <first part's stem>.merged.ply)");
+    cmd->add_option("parts", args->parts,
+                    "The tiles' PLY files (any order), or the GeoTIFFs of a mosaic's tiles "
+                    "(msii compute --tile-of-mosaic), joined into a VRT")
+        ->required();
+    cmd->add_option("-o,--output", args->output,
+                    "Output PLY (default <first part's stem>.merged.ply), or VRT for GeoTIFF parts (default "
+                    "mosaic.msii.vrt next to the first)");
     addCommonOptions(cmd, *args);
     addPropertyNamesOption(cmd, args->propertyPrefix);
     return [args]() {

@@ -5,6 +5,7 @@
 #include <msii/core/errors.h>
 
 #include <cpl_error.h>
+#include <cpl_string.h>
 #include <ogr_spatialref.h>
 
 #include <algorithm>
@@ -91,6 +92,49 @@ std::string crsWkt(const std::string& definition)
     std::string out(wkt);
     CPLFree(wkt);
     return out;
+}
+
+RasterRegion regionOfPart(const std::string& mosaic, const std::string& part)
+{
+    namespace fs = std::filesystem;
+    detail::initGdal();
+    const auto open = [](const std::string& path) {
+        CPLErrorReset();
+        detail::GdalDataset ds(GDALDataset::FromHandle(
+            GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
+        if (!ds) throw IOError("cannot read '" + path + "' as a raster: " + detail::lastGdalError("not a format GDAL reads"));
+        return ds;
+    };
+    detail::GdalDataset whole = open(mosaic);
+    // The part: as given, next to the mosaic, or one of the mosaic's files by name or stem.
+    std::string found;
+    if (fs::exists(part)) found = part;
+    else if (fs::exists(fs::path(mosaic).parent_path() / part)) found = (fs::path(mosaic).parent_path() / part).string();
+    else if (char** files = whole->GetFileList()) {
+        for (int k = 0; files[k] && found.empty(); ++k) {
+            const fs::path f(files[k]);
+            if (f.filename().string() == part || f.stem().string() == part) found = files[k];
+        }
+        CSLDestroy(files);
+    }
+    if (found.empty()) throw InvalidInputError("'" + part + "' is none of the files of " + fileName(mosaic));
+    detail::GdalDataset tile = open(found);
+    std::array<double, 6> t{}, p{};
+    if (whole->GetGeoTransform(t.data()) != CE_None || tile->GetGeoTransform(p.data()) != CE_None)
+        throw InvalidInputError(fileName(found) + " or " + fileName(mosaic) + " has no georeferencing (no geotransform)");
+    const double tol = 1e-6;
+    const bool sameCells = t[2] == 0 && t[4] == 0 && p[2] == 0 && p[4] == 0 && std::abs(p[1] - t[1]) <= tol * std::abs(t[1]) &&
+                           std::abs(p[5] - t[5]) <= tol * std::abs(t[5]);
+    const double col = (p[0] - t[0]) / t[1], row = (p[3] - t[3]) / t[5];
+    RasterRegion r{int(std::lround(col)), int(std::lround(row)), tile->GetRasterXSize(), tile->GetRasterYSize()};
+    if (!sameCells || std::abs(col - r.col) > 1e-3 || std::abs(row - r.row) > 1e-3)
+        throw InvalidInputError(fileName(found) + "'s cells are not on the grid of " + fileName(mosaic) +
+                                " (another cell size, a rotation, or an offset of a fraction of a cell)");
+    // Clipped to the mosaic (a VRT may take only part of a source).
+    const int c1 = std::min(whole->GetRasterXSize(), r.col + r.cols), r1 = std::min(whole->GetRasterYSize(), r.row + r.rows);
+    r.col = std::max(0, r.col), r.row = std::max(0, r.row), r.cols = c1 - r.col, r.rows = r1 - r.row;
+    if (r.cols < 1 || r.rows < 1) throw InvalidInputError(fileName(found) + " lies outside " + fileName(mosaic));
+    return r;
 }
 
 bool isRasterFile(const std::string& path)

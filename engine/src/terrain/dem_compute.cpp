@@ -119,6 +119,7 @@ private:
 struct WindowLayout {
     int width = 0, height = 0;       ///< of the raster, cells
     int side = 0;                    ///< own cells per window side
+    RasterRegion region;             ///< the cells computed and written (all by default)
     int narrowHalo = 0, wideHalo = 0;  ///< cells
     double cell = 0;                 ///< the shortest step between cell centres, ground units
     bool oneWindow = true;
@@ -128,13 +129,15 @@ struct WindowLayout {
 
 /// The plan of several windows, made on the window of 1024² cells at the raster's centre:
 /// its voxel size and vertex spacing, and the local frame's origin at the raster's centre.
+/// With @p whole, the plan of the raster computed in one piece instead, on all of it (one
+/// source tile of a mosaic that fits one window computes with it, to equal that one piece).
 ScalePlan sharedPlan(const DemSource& source, const std::string& input, const ComputeOptions& options,
-                     std::vector<Diagnostic>& diagnostics)
+                     std::vector<Diagnostic>& diagnostics, bool whole = false)
 {
     const RasterGeoreference& grid = source.info().georeference;
     const std::array<double, 6>& t = grid.transform;
     const int W = grid.width, H = grid.height;
-    const int pc = std::min(W, 1024), pr = std::min(H, 1024);
+    const int pc = whole ? W : std::min(W, 1024), pr = whole ? H : std::min(H, 1024);
     const DemMesh pm = demToMesh(source.read((W - pc) / 2, (H - pr) / 2, pc, pr));
     if (pm.mesh.numTriangles() == 0)
         throw InvalidInputError(fileName(input) + ": the window at its centre has no surface to plan the computation on");
@@ -145,6 +148,7 @@ ScalePlan sharedPlan(const DemSource& source, const std::string& input, const Co
     const InvariantsResult planned = planInvariants(prepareMesh(pm.mesh, po).mesh, options.invariants);
     diagnostics = planned.diagnostics;
     ScalePlan plan = planned.plan;
+    if (whole) return plan;  // as compute() plans the one piece
     const double midX = t[0] + 0.5 * W * t[1] + 0.5 * H * t[2], midY = t[3] + 0.5 * W * t[4] + 0.5 * H * t[5];
     plan.origin = localOrigin({midX, midY, 0.5 * (planned.stats.bboxMin.z + planned.stats.bboxMax.z)}, plan.voxelSize);
     return plan;
@@ -173,8 +177,19 @@ WindowLayout layWindows(const DemSource& source, const std::string& input, const
     w.oneWindow = options.windowCells == 0 ? double(w.width) * double(w.height) <= cellsPerWindow
                                            : options.windowCells >= std::max(w.width, w.height);
     w.side = std::max(w.width, w.height);
-    if (w.oneWindow) return w;  // planned on its own mesh, as the mesh path would
-    w.options.invariants.plan = sharedPlan(source, input, w.options, result.diagnostics);
+    w.region = {0, 0, w.width, w.height};
+    if (options.region.cols > 0) {
+        const RasterRegion& g = options.region;
+        if (g.col < 0 || g.row < 0 || g.rows < 1 || g.col + g.cols > w.width || g.row + g.rows > w.height)
+            throw InvalidInputError("the region to compute lies outside the raster");
+        w.region = g;
+    }
+    const bool part = options.region.cols > 0;
+    if (w.oneWindow && !part) return w;  // planned on its own mesh, as the mesh path would
+    // A part of a raster that fits one window computes with the plan of that one piece,
+    // in windows with halos like a larger raster's, so that it equals the one piece.
+    w.options.invariants.plan = sharedPlan(source, input, w.options, result.diagnostics, w.oneWindow);
+    w.oneWindow = false;
     const ScalePlan& plan = *w.options.invariants.plan;
     result.plan = plan;
     // The narrow halo holds everything the own cells depend on; the wide one also a hole next
@@ -247,8 +262,9 @@ bool hasOpenGap(const std::vector<float>& heights, int bw, int bh, double cell, 
 Window readWindow(const DemSource& source, const WindowLayout& w, int wx, int wy)
 {
     Window win;
-    win.col = wx * w.side, win.row = wy * w.side;
-    win.cols = std::min(w.side, w.width - win.col), win.rows = std::min(w.side, w.height - win.row);
+    win.col = w.region.col + wx * w.side, win.row = w.region.row + wy * w.side;
+    win.cols = std::min(w.side, w.region.col + w.region.cols - win.col);
+    win.rows = std::min(w.side, w.region.row + w.region.rows - win.row);
     const auto boxOf = [&](int halo) {
         return std::array<int, 4>{std::max(0, win.col - halo), std::max(0, win.row - halo),
                                   std::min(w.width, win.col + win.cols + halo), std::min(w.height, win.row + win.rows + halo)};
@@ -357,14 +373,15 @@ std::vector<std::vector<float>> computeWindow(const Window& win, const WindowLay
 }
 
 /// Copies the own cells of @p cells (per cell of the window's box) into the output.
-void writeOwnCells(const Window& win, const std::vector<std::vector<float>>& cells, RasterPieceWriter& writer)
+void writeOwnCells(const Window& win, const RasterRegion& region, const std::vector<std::vector<float>>& cells,
+                   RasterPieceWriter& writer)
 {
     std::vector<float> own(std::size_t(win.cols) * std::size_t(win.rows));
     for (std::size_t b = 0; b < cells.size(); ++b) {
         for (int y = 0; y < win.rows; ++y)
             std::copy_n(cells[b].begin() + std::ptrdiff_t(win.boxCell(win.col, win.row + y)), win.cols,
                         own.begin() + std::ptrdiff_t(std::size_t(y) * std::size_t(win.cols)));
-        writer.write(int(b), win.col, win.row, win.cols, win.rows, own.data());
+        writer.write(int(b), win.col - region.col, win.row - region.row, win.cols, win.rows, own.data());
     }
 }
 
@@ -410,14 +427,20 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
     const WindowLayout w = layWindows(source, input, options, result);
     for (const Diagnostic& d : result.diagnostics) diagnostics.add(d);  // the shared plan's
     result.haloCells = w.wideHalo, result.narrowHaloCells = w.narrowHalo, result.windowCells = w.side;
-    result.windowsPerRow = (w.width + w.side - 1) / w.side;
-    result.windowsPerColumn = (w.height + w.side - 1) / w.side;
+    result.windowsPerRow = (w.region.cols + w.side - 1) / w.side;
+    result.windowsPerColumn = (w.region.rows + w.side - 1) / w.side;
     result.bands = bands;
     result.computed = options.compute.invariants.selected();
     result.scaled16 = options.output.scaled16;
     result.readSeconds += stage.seconds();
 
-    RasterPieceWriter writer(output, result.input.georeference, result.bands, options.output);
+    // The output's grid: the region's cells of the input's.
+    RasterGeoreference& grid = result.input.georeference;
+    const std::array<double, 6> t = grid.transform;
+    grid.transform[0] = t[0] + w.region.col * t[1] + w.region.row * t[2];
+    grid.transform[3] = t[3] + w.region.col * t[4] + w.region.row * t[5];
+    grid.width = w.region.cols, grid.height = w.region.rows;
+    RasterPieceWriter writer(output, grid, result.bands, options.output);
     std::size_t ownCellsWithHeight = 0;
     const int windows = result.windowsPerRow * result.windowsPerColumn;
     for (int wy = 0; wy < result.windowsPerColumn; ++wy)
@@ -439,11 +462,13 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
             for (int y = win.row; y < win.row + win.rows; ++y)
                 for (int x = win.col; x < win.col + win.cols; ++x)
                     ownCellsWithHeight += !std::isnan(win.dem.heights[win.boxCell(x, y)]);
-            writeOwnCells(win, cells, writer);
+            writeOwnCells(win, w.region, cells, writer);
             result.writeSeconds += stage.seconds();
         }
     if (context) context->setPrefix("");
-    if (ownCellsWithHeight == 0) throw InvalidInputError(fileName(input) + " has no cell with a height (all nodata)");
+    // A part of a mosaic may be all nodata (sea, a tile outside the survey): written as such.
+    if (ownCellsWithHeight == 0 && options.region.cols == 0)
+        throw InvalidInputError(fileName(input) + " has no cell with a height (all nodata)");
     result.input.numValid = ownCellsWithHeight;
     result.diagnostics = diagnostics.list();
     if (std::optional<Diagnostic> d = result.masked.mostlyMasked(result.plan.radii))

@@ -10,6 +10,7 @@
 #include <msii/io/atomic_file.h>
 
 #include <cpl_string.h>
+#include <gdal_utils.h>
 #include <ogr_spatialref.h>
 
 #include <algorithm>
@@ -156,6 +157,52 @@ void writeRaster(const std::string& path, const RasterGeoreference& grid, const 
     for (std::size_t k = 0; k < bands.size(); ++k)
         writer.write(int(k), 0, 0, grid.width, grid.height, bands[k].values.data());
     writer.commit();
+}
+
+void joinRasterParts(const std::vector<std::string>& parts, const std::string& output)
+{
+    detail::initGdal();
+    if (parts.empty()) throw InvalidInputError("no raster to join");
+    const auto open = [](const std::string& path) {
+        CPLErrorReset();
+        detail::GdalDataset ds(GDALDataset::FromHandle(
+            GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
+        if (!ds) throw IOError("cannot read '" + path + "' as a raster: " + detail::lastGdalError("not a format GDAL reads"));
+        return ds;
+    };
+    const auto bandNames = [](GDALDataset& ds) {
+        std::vector<std::string> names;
+        for (int k = 1; k <= ds.GetRasterCount(); ++k) names.push_back(ds.GetRasterBand(k)->GetDescription());
+        return names;
+    };
+    detail::GdalDataset first = open(parts.front());
+    const std::vector<std::string> names = bandNames(*first);
+    for (const std::string& part : parts)
+        if (bandNames(*open(part)) != names)
+            throw InvalidInputError(part + " has other bands than " + parts.front() + ": not parts of one computation");
+    AtomicFile target(output);
+    std::vector<const char*> sources;
+    for (const std::string& part : parts) sources.push_back(part.c_str());
+    GDALBuildVRTOptions* options = GDALBuildVRTOptionsNew(nullptr, nullptr);
+    int usageError = 0;
+    CPLErrorReset();
+    detail::GdalDataset vrt(GDALDataset::FromHandle(GDALBuildVRT(target.temporaryPath().c_str(), int(sources.size()),
+                                                                 nullptr, sources.data(), options, &usageError)));
+    GDALBuildVRTOptionsFree(options);
+    if (!vrt) throw IOError("cannot join the parts into '" + output + "': " + detail::lastGdalError("gdalbuildvrt failed"));
+    for (int k = 1; k <= first->GetRasterCount(); ++k) {
+        GDALRasterBand* from = first->GetRasterBand(k);
+        GDALRasterBand* to = vrt->GetRasterBand(k);
+        to->SetDescription(from->GetDescription());
+        int has = 0;
+        const double scale = from->GetScale(&has), offset = from->GetOffset();
+        if (has) to->SetScale(scale), to->SetOffset(offset);
+        const double nodata = from->GetNoDataValue(&has);
+        if (has) to->SetNoDataValue(nodata);
+    }
+    if (char** md = first->GetMetadata(); md) vrt->SetMetadata(md);
+    vrt.reset();  // writes the VRT
+    target.commit();
 }
 
 RasterImage readRaster(const std::string& path)

@@ -78,6 +78,18 @@ std::string crsWkt(const std::string& definition);
 /// exceptions around Norway and Svalbard). For the hint to a DEM in degrees.
 std::string utmCrsFor(double longitude, double latitude);
 
+/// Cells [col, col + cols) × [row, row + rows) of a raster; cols = 0: all of it.
+struct RasterRegion {
+    int col = 0, row = 0, cols = 0, rows = 0;
+};
+
+/// Where the raster @p part (one source tile of the mosaic @p mosaic, e.g. a VRT; a path, a
+/// path relative to the mosaic's folder, or the file name or stem of one of its files) lies
+/// in the mosaic's grid.
+/// @throw InvalidInputError if it is none of the mosaic's files, or its cells are not the
+///        mosaic's (another size or rotation, or not on its grid); IOError if unreadable.
+RasterRegion regionOfPart(const std::string& mosaic, const std::string& part);
+
 /// True if GDAL can open @p path as a raster (not a mesh format msii reads itself).
 bool isRasterFile(const std::string& path);
 

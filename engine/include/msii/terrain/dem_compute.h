@@ -36,6 +36,10 @@ struct DemComputeOptions {
     std::vector<std::string> bands;
     /// Own cells per window side; 0 = from the memory budget.
     int windowCells = 0;
+    /// Only these cells are computed and written, on their own grid (one source tile of a
+    /// mosaic, a job of a cluster); the rest of the raster is read as far as their halos
+    /// reach. The values equal those of the whole raster computed in one piece, bit for bit.
+    RasterRegion region;
     /// Float32 bands even where every band is a fraction in [0, 1] (V̂, Ŝ, their quality,
     /// filled_share), which are otherwise written as scaled 16-bit integers
     /// (RasterOutputOptions::scaled16: a resolution of 1.5e-5, a third of the size).
@@ -48,7 +52,9 @@ struct DemComputeOptions {
 std::vector<std::string> demBandNames(const ComputeOptions& options);
 
 struct DemComputeResult {
-    Dem input;                     ///< the raster's grid, band and counts (heights left empty)
+    /// The raster's band and counts (heights left empty), and the output's grid: the region's
+    /// cells of the raster's (all of it by default).
+    Dem input;
     ScalePlan plan;
     std::vector<std::string> bands;          ///< as written
     /// The invariants computed: of those asked, only the ones the bands need (V alone for

@@ -64,6 +64,13 @@ private:
     std::unique_ptr<Impl> mImpl;
 };
 
+/// Joins @p parts, rasters written by msii on tiles of one grid (`msii compute --tile-of-mosaic`),
+/// into the VRT mosaic @p output (written atomically, its parts referred to relative to it):
+/// GDAL's gdalbuildvrt, with the parts' band names, scale and offset, nodata and metadata,
+/// which gdalbuildvrt leaves out.
+/// @throw InvalidInputError if the parts do not have the same bands; IOError if unreadable.
+void joinRasterParts(const std::vector<std::string>& parts, const std::string& output);
+
 /// A raster read back: its grid and every band (float), with the band descriptions as names.
 struct RasterImage {
     RasterGeoreference georeference;
