@@ -461,6 +461,22 @@ std::vector<std::string> manifestStatuses(const fs::path& path)
 }
 } // namespace
 
+// A folder that also holds msii's own outputs (computed into it, then metric, smooth and
+// segment on them): only the scan is an input, not what msii made of it.
+TEST(MsiiCli, ComputeFolderLeavesMsiisOwnOutputsOut)
+{
+    const fs::path in = tempDir() / "own-outputs";
+    fs::create_directories(in);
+    fs::copy_file(smallPatch(), in / "a.ply", fs::copy_options::overwrite_existing);
+    for (const char* made : {"a.msii.ply", "a.gigamesh.ply", "a.msii.metric.ply", "a.msii.metric.smooth.ply",
+                             "a.msii.segments.ply", "a.msii.smooth.ply"})
+        fs::copy_file(smallPatch(), in / made, fs::copy_options::overwrite_existing);
+    const RunResult r = runMsii("compute '" + in.string() + "' -r 0.8 -n 4 -q --overwrite --output-dir '" +
+                                (tempDir() / "own-outputs-out").string() + "'");
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(manifestStatuses(tempDir() / "own-outputs-out" / "msii-manifest.jsonl").size(), 1u);
+}
+
 // A folder as a collection: good and broken files, the rest goes on after a
 // failure, finished outputs are skipped on a rerun, an interrupted output (no JSON record)
 // is redone, the manifest records each input, and the exit status says whether any failed.

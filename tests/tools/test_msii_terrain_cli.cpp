@@ -190,6 +190,10 @@ TEST(MsiiTerrain, BadRastersFailCleanly)
     degrees.crsWkt = crsWkt("EPSG:4326");
     degrees.transform = {9.0, 1e-5, 0, 49.5, 0, -1e-5};
     expectCleanFailure(write("degrees.tif", degrees, {{"height", good.heights}}), "", "gdalwarp -t_srs");
+    // A missing or unreadable raster is named as such, not as an unknown mesh extension.
+    expectCleanFailure((tempDir() / "missing.asc").string(), "", "cannot open");
+    msii::test::writeFile((tempDir() / "garbage.tif").string(), "garbage");
+    expectCleanFailure((tempDir() / "garbage.tif").string(), "", "as a raster");
 
     const std::string twoBands = write("two.tif", good.georeference, {{"height", good.heights}, {"other", good.heights}});
     expectCleanFailure(twoBands, "", "2 bands");
@@ -359,6 +363,8 @@ TEST(MsiiTerrain, RenderAndMapTakeTheGeoTiff)
     const FeatureMapImage map = readFeatureMap(exr.string(), {"height", "quality", "mask"});
     EXPECT_EQ(map.units, "m");
     EXPECT_DOUBLE_EQ(map.frame.pixelSize, 0.5);
+    EXPECT_EQ(map.width, 160);  // a pixel per cell: the DEM's 160 × 120
+    EXPECT_EQ(map.height, 120);
     EXPECT_EQ(map.radii.size(), 4u);
     ASSERT_TRUE(map.channels.count("quality") && map.channels.count("height"));
     std::size_t covered = 0;

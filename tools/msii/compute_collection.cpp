@@ -31,13 +31,18 @@ bool isMeshFile(const fs::path& p)
     std::string ext = p.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
     if (ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl") return false;
-    // Not msii's own outputs (a rerun into the input folder must not take them as inputs).
+    // Not msii's own outputs (a rerun into the input folder must not take them as inputs):
+    // compute's <name>.msii.ply, GigaMesh's <name>.gigamesh.ply, and what the other commands
+    // make of them, <name>.msii.metric.ply, <name>.msii.metric.smooth.ply,
+    // <name>.msii.segments.ply: any name with a part ".msii." or ".gigamesh.".
+    const std::string name = p.filename().string();
     const std::string stem = p.stem().string();
     for (const char* suffix : {".msii", ".gigamesh"}) {
         const std::string s(suffix);
         if (stem.size() > s.size() && stem.compare(stem.size() - s.size(), s.size(), s) == 0) return false;
+        if (name.find(s + ".") != std::string::npos) return false;
     }
-    return p.filename().string().front() != '.';  // nor hidden or temporary files
+    return name.front() != '.';  // nor hidden or temporary files
 }
 
 } // namespace

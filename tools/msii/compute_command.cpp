@@ -354,6 +354,12 @@ bool isRasterInput(const std::string& input)
     std::string ext = fs::path(input).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
     if (ext == ".ply" || ext == ".obj" || ext == ".off" || ext == ".stl") return false;
+    // The extensions of DEM formats: rasters even when missing or unreadable, so that the
+    // error says so (not "unknown mesh extension").
+    static const char* const rasterExtensions[] = {".tif", ".tiff", ".vrt", ".asc", ".img", ".hgt", ".bil",
+                                                   ".flt", ".grd", ".dem", ".nc",  ".xyz", ".jp2"};
+    for (const char* e : rasterExtensions)
+        if (ext == e) return true;
     return fs::is_regular_file(input) && isRasterFile(input);
 }
 
@@ -409,10 +415,12 @@ std::function<int()> addComputeCommand(CLI::App& app)
     auto args = std::make_shared<ComputeArgs>();
     CLI::App* cmd = app.add_subcommand(
         "compute", "Compute the integral invariants V (volume), S (sphere area), P (patch "
-                   "area) and L (line length) at N radii for every vertex; writes a PLY with "
-                   "V_01..V_NN, S_.., P_.., L_.. and quality, and a JSON record next to it.");
+                   "area) and L (line length) at N radii for every vertex of a mesh, or every cell of a "
+                   "DEM raster; writes a PLY with V_01..V_NN, S_.., P_.., L_.. and quality (a GeoTIFF "
+                   "on the DEM's grid for rasters), and a JSON record next to it.");
     cmd->add_option("inputs", args->inputs,
-                    "Mesh files (PLY, OBJ, OFF, STL) or folders of them; several inputs or a folder "
+                    "Mesh files (PLY, OBJ, OFF, STL), DEM rasters (GeoTIFF, VRT mosaic, ESRI ASCII grid, "
+                    "any GDAL raster) or folders of meshes; several inputs or a folder "
                     "make a collection: finished outputs are skipped, failures reported, a manifest "
                     "written")
         ->required();

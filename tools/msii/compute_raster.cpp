@@ -65,7 +65,11 @@ OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, co
     try {
         result = computeDem(input, output, options, &progress);
     } catch (const InvalidInputError& e) {
-        const std::string what = e.what(), name = fs::path(input).filename().string();
+        std::string what = e.what();
+        const std::string name = fs::path(input).filename().string();
+        // The engine says what to choose; the command says with which option.
+        if (const std::size_t at = what.find("choose the height band"); at != std::string::npos)
+            what.insert(at + std::string("choose the height band").size(), " with --band");
         throw InvalidInputError(what.rfind(name, 0) == 0 ? what : name + ": " + what);
     }
     const RasterGeoreference& grid = result.input.georeference;

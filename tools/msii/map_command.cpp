@@ -48,6 +48,7 @@ int runMap(const MapArgs& args)
         const auto given = [](const CLI::Option* o) { return o && o->count() > 0; };
         if (!given(args.view.pixelsOption) && !given(args.view.pixelSizeOption) && !given(args.view.dpiOption))
             frameOpts.longerSidePixels = 0, frameOpts.pixelSize = in.cellSize;
+        frameOpts.margin = 0.5 * in.cellSize;  // the cells around their centres
     }
     if (options.units.empty()) options.units = unitsFromComments(in.comments);
     if (options.units.empty()) options.units = "mm";
@@ -90,7 +91,10 @@ std::function<int()> addMapCommand(CLI::App& app)
                "a chosen view; channels height, normal.x/y/z, mask and every vertex property "
                "(quality, V_01 ...), 32-bit float (or half), lossless compression; the frame is in "
                "the header.");
-    cmd->add_option("input", args->input, "Mesh or feature PLY (e.g. from msii compute)")->required();
+    cmd->add_option("input", args->input,
+                    "Mesh or feature PLY (e.g. from msii compute), or a GeoTIFF from msii compute on a DEM "
+                    "(one pixel per cell)")
+        ->required();
     cmd->add_option("-o,--output", args->output, "Output EXR (default <input stem>.map.exr)");
     cmd->add_option("--mat", args->matFiles, "GigaMesh feature file(s) for the input mesh");
     addViewOptions(cmd, args->view, kDefaultPixels);

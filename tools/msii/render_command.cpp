@@ -345,9 +345,12 @@ std::function<int()> addRenderCommand(CLI::App& app)
 {
     auto args = std::make_shared<RenderArgs>();
     CLI::App* cmd = app.add_subcommand(
-        "render", "PNG picture of a feature PLY or an EXR map: false colour of a value with isolines, "
+        "render", "PNG picture of a feature PLY, a GeoTIFF from msii compute on a DEM, or an EXR map: "
+                  "false colour of a value with isolines, "
                   "shaded relief (virtual illumination) or the height map, with colour bar and scale bar.");
-    cmd->add_option("input", args->input, "Mesh or feature PLY, or an EXR map from msii map")->required();
+    cmd->add_option("input", args->input,
+                    "Mesh or feature PLY, a GeoTIFF from msii compute on a DEM, or an EXR map from msii map")
+        ->required();
     cmd->add_option("-o,--output", args->output, "Output PNG (default <input stem>.<what>.png)");
     cmd->add_option("--mat", args->matFiles, "GigaMesh feature file(s) for the input mesh");
     cmd->add_option("--show", args->show,

@@ -224,6 +224,7 @@ MapFrame makeMapFrame(const TriMesh& mesh, const MapFrameOptions& options)
             minU = std::min(minU, m.x), maxU = std::max(maxU, m.x);
             minV = std::min(minV, m.y), maxV = std::max(maxV, m.y);
         }
+    minU -= options.margin, maxU += options.margin, minV -= options.margin, maxV += options.margin;
     const double extent = std::max(maxU - minU, maxV - minV);
     if (options.longerSidePixels > 0) frame.pixelSize = extent / options.longerSidePixels;
     else if (options.pixelSize > 0) frame.pixelSize = options.pixelSize;

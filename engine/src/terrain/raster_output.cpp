@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <filesystem>
 #include <limits>
 
 #include "gdal_support.h"
@@ -208,6 +209,7 @@ void joinRasterParts(const std::vector<std::string>& parts, const std::string& o
 RasterImage readRaster(const std::string& path)
 {
     detail::initGdal();
+    if (!std::filesystem::exists(path)) throw IOError("cannot open '" + path + "': no such file");
     CPLErrorReset();
     detail::GdalDataset ds(GDALDataset::FromHandle(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY,
                                                               nullptr, nullptr, nullptr)));

@@ -31,6 +31,10 @@ struct MapFrameOptions {
     double dpi = 0;
     /// Largest allowed side in pixels (the pixel buffers cost 16 bytes per pixel).
     int maxSidePixels = 16384;
+    /// The surface's extent grown by this on every side (mesh units): half a cell for a
+    /// raster's mesh, whose vertices are the cells' centres, so that W × H cells give W × H
+    /// pixels, one per cell.
+    double margin = 0;
 };
 
 struct MapFrame {
