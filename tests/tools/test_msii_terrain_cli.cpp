@@ -545,3 +545,23 @@ TEST(MsiiTerrain, TilesOfAMosaicJoinedEqualOnePiece)
     EXPECT_NE(r.code, 0);
     EXPECT_NE(r.err.find("none of the files"), std::string::npos) << r.err;
 }
+
+// Without --radius a DEM gets a suggestion from its cells (15 cells: 7.5 m on the sample's
+// 0.5 m), and without --scales N = R / cell size, so that the smallest radius is a cell and
+// the run does not warn that it is below the edge length.
+TEST(MsiiTerrain, RadiusSuggestionAndRadiiOfWholeCells)
+{
+    RunResult r = run(MSII_EXE, "compute '" + demSample() + "'");
+    EXPECT_NE(r.code, 0);
+    EXPECT_NE(r.err.find("try --radius 7.5"), std::string::npos) << r.err;
+    const fs::path out = tempDir() / "whole_cells.msii.tif";
+    r = run(MSII_EXE, "compute '" + demSample() + "' -r 5 --overwrite --raster-output '" + out.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err.find("smallest radius"), std::string::npos) << r.err;
+    const std::string record = readFile((tempDir() / "whole_cells.msii.json").string());
+    EXPECT_NE(record.find("\"scales\": 10"), std::string::npos) << record.substr(0, 2000);
+    // Given, N is kept.
+    r = run(MSII_EXE, "compute '" + demSample() + "' -r 5 -n 4 -q --overwrite --raster-output '" + out.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(readFile((tempDir() / "whole_cells.msii.json").string()).find("\"scales\": 4"), std::string::npos);
+}

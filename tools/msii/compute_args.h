@@ -1,4 +1,6 @@
 #pragma once
+
+#include <CLI/CLI.hpp>
 /// @file compute_args.h
 /// @brief `msii compute`'s arguments and the pieces its two files share:
 /// compute_command.cpp (the options and one input's run) and compute_collection.cpp
@@ -24,6 +26,7 @@ struct ComputeArgs : CommonArgs {
     std::string output, outputDir;
     double radius = 0;
     int scales = 16;
+    const CLI::Option* scalesOption = nullptr;  // given on the command line (DEMs default otherwise)
     double voxelSize = 0;
     double precision = 6.0;
     double plPrecision = 0;  // 0 = 4/3 of precision (the engine's default)

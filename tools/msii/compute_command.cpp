@@ -283,6 +283,21 @@ ComputeResult runPipeline(const ComputeArgs& args, const std::string& input, con
 std::string radiusHint(const std::string& input)
 {
     try {
+        if (isRasterInput(input)) {
+            // DEMs: 15 cells (15 m on 1 m lidar: ditches, mounds, field boundaries;
+            // docs/terrain.md), at most a tenth of the extent.
+            const DemSource dem(input, {});
+            const RasterGeoreference& g = dem.info().georeference;
+            const std::array<double, 6>& t = g.transform;
+            const double cell = std::min(std::hypot(t[1], t[4]), std::hypot(t[2], t[5]));
+            const double extent = std::hypot(g.width * cell, g.height * cell);
+            const double suggestion = std::min(15.0 * cell, 0.1 * extent);
+            std::ostringstream s;
+            s << std::setprecision(3) << "; for " << fs::path(input).filename().string() << " (cells of " << cell << " "
+              << g.units << ", " << g.width * cell << " x " << g.height * cell << ") try --radius " << suggestion
+              << " and make R about the size of the largest feature to detect";
+            return s.str();
+        }
         const ReadMeshResult read = readMesh(input);
         const MeshStats stats = computeMeshStats(read.mesh);
         const double suggestion = std::min(30.0 * stats.medianEdge, 0.1 * stats.diagonal);
@@ -427,7 +442,9 @@ std::function<int()> addComputeCommand(CLI::App& app)
     cmd->add_option("-r,--radius", args->radius,
                     "Largest radius R in mesh units (usually mm): about the size of the largest "
                     "feature to detect. Radii are r_j = j*R/N.");
-    cmd->add_option("-n,--scales", args->scales, "Number of radii N (default 16)");
+    args->scalesOption = cmd->add_option("-n,--scales", args->scales,
+                                         "Number of radii N (default 16; for DEMs R / cell size, 4 to 16, so that "
+                                         "the smallest radius is at least a cell)");
     cmd->add_option("-o,--output", args->output, "Output PLY (one input only)");
     cmd->add_option("--manifest", args->manifest,
                     "Collections: JSON-lines record of each input (appended; default "

@@ -16,6 +16,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -25,8 +27,28 @@ namespace fs = std::filesystem;
 
 namespace msii::tools {
 
-OneResult computeRasterOne(const ComputeArgs& args, const std::string& input, const std::string& output)
+namespace {
+
+/// N for a DEM when not given: R / cell size, between 4 and 16, so that the smallest radius
+/// is at least a cell (below it, a ball holds about one cell centre: the paper's sampling
+/// bound) and the radii fall on whole cells (1, 2, ... m on 1 m lidar).
+int demScales(const ComputeArgs& args, const std::string& input)
 {
+    if (args.scalesOption && args.scalesOption->count() > 0) return args.scales;
+    DemReadOptions ro;
+    ro.band = args.band;
+    const DemSource dem(input, ro);
+    const RasterGeoreference& g = dem.info().georeference;
+    const double cell = std::min(std::hypot(g.transform[1], g.transform[4]), std::hypot(g.transform[2], g.transform[5]));
+    return std::clamp(int(std::floor(args.radius / cell + 1e-9)), 4, 16);
+}
+
+} // namespace
+
+OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, const std::string& output)
+{
+    ComputeArgs args = given;
+    args.scales = demScales(given, input);
     const Stopwatch total;
     if (args.exact) throw InvalidInputError("--exact is for meshes; for a DEM, compute its mesh (msii-samples writes none: use the fast mode)");
     if (args.gigamesh) throw InvalidInputError("--gigamesh is for meshes, not rasters");

@@ -71,6 +71,14 @@ bool allFractions(const std::vector<std::string>& bands, const InvariantsOptions
     });
 }
 
+/// Whether a window's remark @p d stands for the DEM: not that the smallest radius is below
+/// the edge length when it is a cell or more (a DEM's edges are longer than its cells where
+/// it slopes, but a ball of a cell's radius still holds its neighbours).
+bool kept(const Diagnostic& d, const ScalePlan& plan, double cell)
+{
+    return !(d.kind == "smallest_radius_below_edge" && !plan.radii.empty() && plan.radii.front() >= cell * (1 - 1e-9));
+}
+
 /// Diagnostics of several windows as one list: counts summed, figures summed (areas) or the
 /// largest (perimeters, shares), the sentence of the window with the most.
 class DiagnosticSum {
@@ -101,7 +109,9 @@ public:
         std::vector<Diagnostic> out;
         for (const std::string& kind : mOrder) {
             Diagnostic d = mByKind.at(kind);
-            if (mWindows.at(kind) > 1)
+            // Counted things (holes, vertices): the window with the most, and the sum; a
+            // remark without a count (a radius below the cell size) is the same in each.
+            if (mWindows.at(kind) > 1 && d.count > 0)
                 d.message += " [the window with the most; " + std::to_string(d.count) + " in all " +
                              std::to_string(mWindows.at(kind)) + " windows that had any, overlaps counted in each]";
             out.push_back(std::move(d));
@@ -356,8 +366,10 @@ std::vector<std::vector<float>> computeWindow(const Window& win, const WindowLay
     }
     const ComputeResult r = compute(dm.mesh, options, context);
     if (w.oneWindow) result.plan = r.plan;
-    for (const Diagnostic& d : r.diagnostics)
-        if (d.kind != "mostly_masked") diagnostics.add(d);  // counted below over the own cells
+    for (const Diagnostic& d : r.diagnostics) {
+        if (d.kind == "mostly_masked") continue;  // counted below over the own cells
+        if (kept(d, r.plan, w.cell)) diagnostics.add(d);
+    }
     result.cost += r.cost;
     result.prepareSeconds += r.preparation.seconds;
     result.triangles += dm.mesh.numTriangles();
@@ -425,7 +437,8 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
     result.input = source.info();
     DiagnosticSum diagnostics;
     const WindowLayout w = layWindows(source, input, options, result);
-    for (const Diagnostic& d : result.diagnostics) diagnostics.add(d);  // the shared plan's
+    for (const Diagnostic& d : result.diagnostics)  // the shared plan's
+        if (kept(d, result.plan, w.cell)) diagnostics.add(d);
     result.haloCells = w.wideHalo, result.narrowHaloCells = w.narrowHalo, result.windowCells = w.side;
     result.windowsPerRow = (w.region.cols + w.side - 1) / w.side;
     result.windowsPerColumn = (w.region.rows + w.side - 1) / w.side;
