@@ -148,8 +148,8 @@ What the rows are:
   result holds its arrays (vertices, faces and the (n, N) float32 arrays of V, S, P, L) on
   top of the engine's own peak, and should cost no more than that sum.
 - **DEM**: `msii compute` on a generated GeoTIFF DEM (0.5 m cells in EPSG:25832, hills about
-  25 m wide and 4 m high, 200 small nodata patches), R = 15 m, N = 16, V and S, in windows
-  sized to the default 3 GB budget, in a process of its own with its peak memory
+  25 m wide and 4 m high, 200 small nodata patches), R = 15 m, N = 16, the default bands
+  (quality and V at every radius: V alone is computed), in windows sized to the default 3 GB budget, in a process of its own with its peak memory
   ([terrain.md](terrain.md#large-areas)).
 
 This machine's timings vary from one sitting to the next, by 15–20 % within a day and by up
@@ -211,7 +211,7 @@ void addOptions(CLI::App& app, Settings& s)
     app.add_option("--large-budget", s.largeBudget, "--memory-budget of that run (default 8G)");
     app.add_option("--dem-cells", s.demCells,
                    "also run msii compute on a generated GeoTIFF DEM of about this many cells (e.g. 1e8: 10,000 x "
-                   "10,000 cells of 0.5 m), R = 15 m, N = 16, V and S, in windows (default 0: skip)");
+                   "10,000 cells of 0.5 m), R = 15 m, N = 16, default bands, in windows (default 0: skip)");
     app.add_option("--msii", s.msiiProgram, "the msii program (default: the one built with this benchmark)");
     app.add_option("--msii-samples", s.samplesProgram, "the msii-samples program (default: the one built with this benchmark)");
     app.add_option("--processes", s.processes,
@@ -326,8 +326,7 @@ bool runDem(const Bench& bench, DemRun& dem)
         fs::remove_all(dir);
         return false;
     }
-    dem.compute = runChild({s.msiiProgram, "compute", tif, "-r", "15", "-n", "16", "--invariants", "V,S", "-q",
-                            "--raster-output", out});
+    dem.compute = runChild({s.msiiProgram, "compute", tif, "-r", "15", "-n", "16", "-q", "--raster-output", out});
     if (!dem.compute.ok) {
         std::fprintf(stderr, "msii-benchmark: error: msii compute failed on the DEM\n");
         fs::remove_all(dir);
@@ -835,7 +834,7 @@ void printDemTable(Report& report, const DemRun& dem)
     const double cells = double(dem.side) * dem.side;
     const nlohmann::json& windows = d["raster"]["windows"];
     report.print("\nDEM %d x %d cells of 0.5 m (GeoTIFF, EPSG:25832, %.0f cells with heights); msii compute -r 15 "
-                 "-n 16 --invariants V,S: %d x %d windows of %d cells, halo %d cells (%d where no nodata gap "
+                 "-n 16 (default bands): %d x %d windows of %d cells, halo %d cells (%d where no nodata gap "
                  "crosses it, in %d windows); one run each, separate processes\n\n",
                  dem.side, dem.side, d["raster"]["cells_with_height"].get<double>(), windows["per_row"].get<int>(),
                  windows["per_column"].get<int>(), windows["cells"].get<int>(), windows["halo_cells"].get<int>(),
@@ -853,6 +852,7 @@ void printDemTable(Report& report, const DemRun& dem)
     for (const char* stage : {"read", "prepare", "level_set", "occupancy", "stencils", "interpolation", "write"})
         report.print("| %-62s | %8.1f | %8s |\n", ("  of which " + std::string(stage)).c_str(), t[stage].get<double>(), "");
     report.print("| %-62s | %8.2f | %8s |\n", "microseconds per cell", 1e6 * dem.compute.seconds / cells, "");
+    report.print("| %-62s | %8.0f | %8s |\n", "cells per second", cells / dem.compute.seconds, "");
     report.print("| %-62s | %8s | %8s |\n", "targets", "1200", "4000");
 }
 
