@@ -149,7 +149,7 @@ What the rows are:
   top of the engine's own peak, and should cost no more than that sum.
 - **DEM**: `msii compute` on a generated GeoTIFF DEM (0.5 m cells in EPSG:25832, hills about
   25 m wide and 4 m high, 200 small nodata patches), R = 15 m, N = 16, the default bands
-  (quality and V at every radius: V alone is computed), in windows sized to the default 3 GB budget, in a process of its own with its peak memory
+  (quality and V at R/4, R/2, 3R/4 and R: V alone is computed), in windows sized to the default 3 GB budget, in a process of its own with its peak memory
   ([terrain.md](terrain.md#large-areas)).
 
 This machine's timings vary from one sitting to the next, by 15–20 % within a day and by up

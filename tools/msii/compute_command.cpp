@@ -464,7 +464,8 @@ std::function<int()> addComputeCommand(CLI::App& app)
         ->group("Terrain (DEM rasters)");
     cmd->add_option("--bands", args->bands,
                     "Raster inputs: the features written as bands, comma-separated, e.g. quality,V_04,V_16,S_16 "
-                    "(default: quality and V at every radius); only the invariants they need are computed")
+                    "(default: quality and V at a quarter, half, three quarters of R and R; quality,V writes V at every "
+                    "radius); only the invariants they need are computed")
         ->group("Terrain (DEM rasters)");
     cmd->add_option("--tile-of-mosaic", args->tileOfMosaic,
                     "Raster inputs: compute only the cells of this source tile of the mosaic (a VRT's file, by path, "

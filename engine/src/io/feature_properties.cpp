@@ -96,6 +96,17 @@ std::vector<std::string> parseFeatureNames(const std::string& text, const std::v
         }
         const std::size_t end = std::min(text.find_first_of(", \t", i), text.size());
         const std::string name = text.substr(i, end - i);
+        // A letter alone (V, S, P, L): that invariant at every radius, in order.
+        if (name.size() == 1 && std::string("VSPLvspl").find(name[0]) != std::string::npos) {
+            const char letter = char(std::toupper(static_cast<unsigned char>(name[0])));
+            std::size_t added = 0;
+            for (const std::string& a : available)
+                if (a.size() > 2 && a[0] == letter && a[1] == '_') out.push_back(a), ++added;
+            if (added > 0) {
+                i = end;
+                continue;
+            }
+        }
         const auto found = std::find_if(available.begin(), available.end(),
                                         [&](const std::string& a) { return lowerCase(a) == lowerCase(name); });
         if (found == available.end())

@@ -18,16 +18,23 @@ namespace {
 
 std::string fileName(const std::string& path) { return std::filesystem::path(path).filename().string(); }
 
-/// The features written: by name, or quality and V at every radius (the first invariant
-/// computed). quality first: GIS open a raster on its first band (QGIS on the first three as
-/// red, green and blue), and quality is the one to look at.
+/// The features written: by name, or quality and the first invariant computed (V) at a
+/// quarter, half, three quarters of R and R (docs/terrain.md, Output size: four radii show
+/// the scales to the eye, and keep the file at a fraction of all N; `--bands quality,V`
+/// writes every radius). quality first: GIS open a raster on its first band (QGIS on the
+/// first three as red, green and blue), and quality is the one to look at.
 std::vector<std::string> bandNames(const DemComputeOptions& options)
 {
     if (!options.bands.empty()) return options.bands;
     const InvariantsOptions& o = options.compute.invariants;
     const char letter = o.computeVolume ? 'V' : o.computeSphere ? 'S' : o.computePatch ? 'P' : 'L';
     std::vector<std::string> names{"quality"};
-    for (int j = 0; j < o.scales; ++j) names.push_back(featureName(letter, std::size_t(j)));
+    int previous = 0;
+    for (int k = 1; k <= 4; ++k) {
+        const int j = std::max(1, (k * o.scales + 3) / 4);  // r_j at about k/4 of R
+        if (j > previous) names.push_back(featureName(letter, std::size_t(j - 1)));
+        previous = j;
+    }
     return names;
 }
 
