@@ -425,6 +425,39 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     return {read.mesh.numVertices(), result.plan.voxelSize, total.seconds()};
 }
 
+namespace {
+
+/// The options for DEM rasters (the group "Terrain (DEM rasters)" of msii compute --help).
+void addTerrainOptions(CLI::App& cmd, ComputeArgs& args)
+{
+    cmd.add_option("--raster-output", args.rasterOutput,
+                    "Raster (DEM) inputs: the output GeoTIFF (default <input stem>.msii.tif): a Cloud-Optimized "
+                    "GeoTIFF on the input's grid, one band per feature: 16-bit integers scaled to 1.5e-5 when every "
+                    "band is a fraction in [0, 1] (V, S, their quality, filled_share), else float32")
+        ->group("Terrain (DEM rasters)");
+    cmd.add_option("--bands", args.bands,
+                    "Raster inputs: the features written as bands, comma-separated, e.g. quality,V_04,V_16,S_16 "
+                    "(default: quality and V at a quarter, half, three quarters of R and R; quality,V writes V at every "
+                    "radius); only the invariants they need are computed")
+        ->group("Terrain (DEM rasters)");
+    cmd.add_option("--tile-of-mosaic", args.tileOfMosaic,
+                    "Raster inputs: compute only the cells of this source tile of the mosaic (a VRT's file, by path, "
+                    "name or stem), reading the mosaic around it as far as its values depend on; writes "
+                    "<tile>.msii.tif on the tile's grid. The tiles' outputs joined (msii merge) equal the mosaic "
+                    "computed in one piece, bit for bit: one job per tile on a cluster")
+        ->group("Terrain (DEM rasters)");
+    cmd.add_flag("--float32", args.float32,
+                  "Raster inputs: float32 bands even where 16-bit scaled integers would hold them (3 times the size)")
+        ->group("Terrain (DEM rasters)");
+    cmd.add_option("--band", args.band, "Raster inputs: the height band of a multi-band raster (1, 2, ...)")
+        ->group("Terrain (DEM rasters)");
+    cmd.add_option("--window-cells", args.windowCells,
+                    "Raster inputs: own cells per window side (default: windows sized to --memory-budget, 3G)")
+        ->group("Terrain (DEM rasters)");
+}
+
+} // namespace
+
 std::function<int()> addComputeCommand(CLI::App& app)
 {
     auto args = std::make_shared<ComputeArgs>();
@@ -457,30 +490,7 @@ std::function<int()> addComputeCommand(CLI::App& app)
     cmd->add_option("--tile", args->tile,
                     "With --tiles K: compute only tile I (0 to K*K-1), e.g. one cluster job per tile; "
                     "msii merge joins the parts");
-    cmd->add_option("--raster-output", args->rasterOutput,
-                    "Raster (DEM) inputs: the output GeoTIFF (default <input stem>.msii.tif): a Cloud-Optimized "
-                    "GeoTIFF on the input's grid, one band per feature: 16-bit integers scaled to 1.5e-5 when every "
-                    "band is a fraction in [0, 1] (V, S, their quality, filled_share), else float32")
-        ->group("Terrain (DEM rasters)");
-    cmd->add_option("--bands", args->bands,
-                    "Raster inputs: the features written as bands, comma-separated, e.g. quality,V_04,V_16,S_16 "
-                    "(default: quality and V at a quarter, half, three quarters of R and R; quality,V writes V at every "
-                    "radius); only the invariants they need are computed")
-        ->group("Terrain (DEM rasters)");
-    cmd->add_option("--tile-of-mosaic", args->tileOfMosaic,
-                    "Raster inputs: compute only the cells of this source tile of the mosaic (a VRT's file, by path, "
-                    "name or stem), reading the mosaic around it as far as its values depend on; writes "
-                    "<tile>.msii.tif on the tile's grid. The tiles' outputs joined (gdalbuildvrt) equal the mosaic "
-                    "computed in one piece, bit for bit: one job per tile on a cluster")
-        ->group("Terrain (DEM rasters)");
-    cmd->add_flag("--float32", args->float32,
-                  "Raster inputs: float32 bands even where 16-bit scaled integers would hold them (3 times the size)")
-        ->group("Terrain (DEM rasters)");
-    cmd->add_option("--band", args->band, "Raster inputs: the height band of a multi-band raster (1, 2, ...)")
-        ->group("Terrain (DEM rasters)");
-    cmd->add_option("--window-cells", args->windowCells,
-                    "Raster inputs: own cells per window side (default: windows sized to --memory-budget, 3G)")
-        ->group("Terrain (DEM rasters)");
+    addTerrainOptions(*cmd, *args);
     cmd->add_option("--output-dir", args->outputDir,
                     "Folder for the outputs <name>.msii.ply (default: next to each input)");
     cmd->add_option("--voxel-size", args->voxelSize,
