@@ -190,6 +190,9 @@ TEST(MsiiTerrain, BadRastersFailCleanly)
     degrees.crsWkt = crsWkt("EPSG:4326");
     degrees.transform = {9.0, 1e-5, 0, 49.5, 0, -1e-5};
     expectCleanFailure(write("degrees.tif", degrees, {{"height", good.heights}}), "", "gdalwarp -t_srs");
+    // Bands the computation cannot give: refused before anything is computed, with the names.
+    expectCleanFailure(demSample(), "--bands quality,V_99", "there is no feature 'V_99'");
+    expectCleanFailure(demSample(), "--invariants V --bands S_04", "there is no feature 'S_04'");
     // A missing or unreadable raster is named as such, not as an unknown mesh extension.
     expectCleanFailure((tempDir() / "missing.asc").string(), "", "cannot open");
     msii::test::writeFile((tempDir() / "garbage.tif").string(), "garbage");
