@@ -18,9 +18,10 @@
 
 using namespace msii;
 
-TEST(AccuracyCli, FlatPatchRowIsSmallAndComplete)
+namespace {
+/// A flat open patch of 5 × 5 mm at 0.05 mm in @p dir, where both modes are near-exact.
+std::string writeFlatPatch(const msii::test::TempDir& dir)
 {
-    const msii::test::TempDir dir;
     samples::HeightFieldOptions o;
     o.kind = samples::HeightFieldKind::Plane;
     o.width = 5;
@@ -28,6 +29,14 @@ TEST(AccuracyCli, FlatPatchRowIsSmallAndComplete)
     o.spacing = 0.05;
     const std::string mesh = dir.file("plane.ply");
     writePly(mesh, samples::makeHeightField(o), {});
+    return mesh;
+}
+} // namespace
+
+TEST(AccuracyCli, FlatPatchRowIsSmallAndComplete)
+{
+    const msii::test::TempDir dir;
+    const std::string mesh = writeFlatPatch(dir);
     const msii::test::RunResult r = msii::test::runProgram(MSII_ACCURACY_EXE, "'" + mesh + "' -r 0.8 --vertices 40",
                                                           dir.path());
     ASSERT_EQ(r.code, 0) << r.err;
@@ -108,13 +117,7 @@ TEST(AccuracyCli, MeshWithoutRadiusIsAUsageError)
 TEST(AccuracyCli, ByRadiusGivesEachRangeOrADash)
 {
     const msii::test::TempDir dir;
-    samples::HeightFieldOptions o;
-    o.kind = samples::HeightFieldKind::Plane;
-    o.width = 5;
-    o.height = 5;
-    o.spacing = 0.05;
-    const std::string mesh = dir.file("plane.ply");
-    writePly(mesh, samples::makeHeightField(o), {});
+    const std::string mesh = writeFlatPatch(dir);
     const msii::test::RunResult r =
         msii::test::runProgram(MSII_ACCURACY_EXE, "'" + mesh + "' -r 0.75 --vertices 40 --by-radius", dir.path());
     ASSERT_EQ(r.code, 0) << r.err;

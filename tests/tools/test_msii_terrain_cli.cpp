@@ -59,6 +59,16 @@ std::string gdalinfo(const std::string& path)
     return r.out;
 }
 
+/// GDAL's checksum of each band of @p path (and of its overviews, if any), in order.
+std::vector<std::string> bandChecksums(const std::string& path)
+{
+    const RunResult c = run("gdalinfo", "-checksum '" + path + "'");
+    std::vector<std::string> sums;
+    for (std::size_t at = c.out.find("Checksum="); at != std::string::npos; at = c.out.find("Checksum=", at + 1))
+        sums.push_back(c.out.substr(at, c.out.find('\n', at) - at));
+    return sums;
+}
+
 void expectCleanFailure(const std::string& input, const std::string& extra, const std::string& mentions)
 {
     SCOPED_TRACE(input + " " + extra);
@@ -393,14 +403,7 @@ TEST(MsiiTerrain, ComputesOnlyWhatTheBandsNeedAndQualityComesFirst)
     ASSERT_NE(first, std::string::npos) << info;
     EXPECT_EQ(info.compare(first, 23, "\"description\":\"quality\""), 0) << info.substr(first, 40);
     // The bands' checksums, in band order: the five of onlyV are withP's first five.
-    const auto checksums = [](const std::string& path) {
-        const RunResult c = run("gdalinfo", "-checksum '" + path + "'");
-        std::vector<std::string> sums;
-        for (std::size_t at = c.out.find("Checksum="); at != std::string::npos; at = c.out.find("Checksum=", at + 1))
-            sums.push_back(c.out.substr(at, c.out.find('\n', at) - at));
-        return sums;
-    };
-    const std::vector<std::string> a = checksums(onlyV.string()), b = checksums(withP.string());
+    const std::vector<std::string> a = bandChecksums(onlyV.string()), b = bandChecksums(withP.string());
     ASSERT_GE(a.size(), 5u);  // overviews may add more
     ASSERT_GE(b.size(), 6u);
     for (std::size_t band = 0; band < 5; ++band) EXPECT_EQ(a[band], b[band]) << "band " << band + 1;
@@ -525,14 +528,8 @@ TEST(MsiiTerrain, TilesOfAMosaicJoinedEqualOnePiece)
     }
     r = run(MSII_EXE, "merge" + parts + " -q -o " + d + "joined.msii.vrt'");
     ASSERT_EQ(r.code, 0) << r.err;
-    const auto checksums = [](const fs::path& path) {
-        const RunResult c = run("gdalinfo", "-checksum '" + path.string() + "'");
-        std::vector<std::string> sums;
-        for (std::size_t at = c.out.find("Checksum="); at != std::string::npos; at = c.out.find("Checksum=", at + 1))
-            sums.push_back(c.out.substr(at, c.out.find('\n', at) - at));
-        return sums;
-    };
-    const std::vector<std::string> whole = checksums(dir / "whole.msii.tif"), joined = checksums(dir / "joined.msii.vrt");
+    const std::vector<std::string> whole = bandChecksums((dir / "whole.msii.tif").string()),
+                                   joined = bandChecksums((dir / "joined.msii.vrt").string());
     ASSERT_EQ(whole.size(), 5u);
     EXPECT_EQ(joined, whole);
     const std::string info = gdalinfo((dir / "joined.msii.vrt").string());

@@ -50,6 +50,16 @@ std::string lastGdalError(const std::string& otherwise)
     return msg && *msg ? std::string(msg) : otherwise;
 }
 
+GdalDataset openRaster(const std::string& path)
+{
+    initGdal();
+    if (!std::filesystem::exists(path)) throw IOError("cannot open '" + path + "': no such file");
+    CPLErrorReset();
+    GdalDataset ds(GDALDataset::FromHandle(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
+    if (!ds) throw IOError("cannot read '" + path + "' as a raster: " + lastGdalError("not a format GDAL reads"));
+    return ds;
+}
+
 } // namespace detail
 
 namespace {
@@ -97,15 +107,7 @@ std::string crsWkt(const std::string& definition)
 RasterRegion regionOfPart(const std::string& mosaic, const std::string& part)
 {
     namespace fs = std::filesystem;
-    detail::initGdal();
-    const auto open = [](const std::string& path) {
-        CPLErrorReset();
-        detail::GdalDataset ds(GDALDataset::FromHandle(
-            GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
-        if (!ds) throw IOError("cannot read '" + path + "' as a raster: " + detail::lastGdalError("not a format GDAL reads"));
-        return ds;
-    };
-    detail::GdalDataset whole = open(mosaic);
+    detail::GdalDataset whole = detail::openRaster(mosaic);
     // The part: as given, next to the mosaic, or one of the mosaic's files by name or stem.
     std::string found;
     if (fs::exists(part)) found = part;
@@ -118,7 +120,7 @@ RasterRegion regionOfPart(const std::string& mosaic, const std::string& part)
         CSLDestroy(files);
     }
     if (found.empty()) throw InvalidInputError("'" + part + "' is none of the files of " + fileName(mosaic));
-    detail::GdalDataset tile = open(found);
+    detail::GdalDataset tile = detail::openRaster(found);
     std::array<double, 6> t{}, p{};
     if (whole->GetGeoTransform(t.data()) != CE_None || tile->GetGeoTransform(p.data()) != CE_None)
         throw InvalidInputError(fileName(found) + " or " + fileName(mosaic) + " has no georeferencing (no geotransform)");
@@ -157,13 +159,7 @@ DemSource::DemSource(const std::string& path, const DemReadOptions& options) : m
 {
     mImpl->path = path;
     detail::GdalDataset& mDataset = mImpl->dataset;
-    detail::initGdal();
-    CPLErrorReset();
-    if (!std::filesystem::exists(path)) throw IOError("cannot open '" + path + "': no such file");
-    mDataset.reset(GDALDataset::FromHandle(
-        GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
-    if (!mDataset)
-        throw IOError("cannot read '" + path + "' as a raster: " + detail::lastGdalError("not a format GDAL reads"));
+    mDataset = detail::openRaster(path);
     GDALDataset& ds = *mDataset;
     const std::string name = fileName(path);
     mInfo.bandsInFile = ds.GetRasterCount();

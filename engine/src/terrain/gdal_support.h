@@ -27,4 +27,8 @@ void describeCrs(const OGRSpatialReference& srs, RasterGeoreference& g);
 /// GDAL's last error message, or @p otherwise if it has none.
 std::string lastGdalError(const std::string& otherwise);
 
+/// @p path opened read-only as a raster.
+/// @throw IOError "cannot open … no such file", or "cannot read … as a raster: <GDAL's reason>".
+GdalDataset openRaster(const std::string& path);
+
 } // namespace msii::detail

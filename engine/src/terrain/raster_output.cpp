@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <filesystem>
 #include <limits>
 
 #include "gdal_support.h"
@@ -162,24 +161,16 @@ void writeRaster(const std::string& path, const RasterGeoreference& grid, const 
 
 void joinRasterParts(const std::vector<std::string>& parts, const std::string& output)
 {
-    detail::initGdal();
     if (parts.empty()) throw InvalidInputError("no raster to join");
-    const auto open = [](const std::string& path) {
-        CPLErrorReset();
-        detail::GdalDataset ds(GDALDataset::FromHandle(
-            GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
-        if (!ds) throw IOError("cannot read '" + path + "' as a raster: " + detail::lastGdalError("not a format GDAL reads"));
-        return ds;
-    };
     const auto bandNames = [](GDALDataset& ds) {
         std::vector<std::string> names;
         for (int k = 1; k <= ds.GetRasterCount(); ++k) names.push_back(ds.GetRasterBand(k)->GetDescription());
         return names;
     };
-    detail::GdalDataset first = open(parts.front());
+    detail::GdalDataset first = detail::openRaster(parts.front());
     const std::vector<std::string> names = bandNames(*first);
     for (const std::string& part : parts)
-        if (bandNames(*open(part)) != names)
+        if (bandNames(*detail::openRaster(part)) != names)
             throw InvalidInputError(part + " has other bands than " + parts.front() + ": not parts of one computation");
     AtomicFile target(output);
     std::vector<const char*> sources;
@@ -208,12 +199,7 @@ void joinRasterParts(const std::vector<std::string>& parts, const std::string& o
 
 RasterImage readRaster(const std::string& path)
 {
-    detail::initGdal();
-    if (!std::filesystem::exists(path)) throw IOError("cannot open '" + path + "': no such file");
-    CPLErrorReset();
-    detail::GdalDataset ds(GDALDataset::FromHandle(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY,
-                                                              nullptr, nullptr, nullptr)));
-    if (!ds) throw IOError("cannot read '" + path + "' as a raster: " + detail::lastGdalError("not a format GDAL reads"));
+    detail::GdalDataset ds = detail::openRaster(path);
     RasterImage image;
     RasterGeoreference& g = image.georeference;
     g.width = ds->GetRasterXSize();
