@@ -278,6 +278,17 @@ ComputeResult runPipeline(const ComputeArgs& args, const std::string& input, con
     }
 }
 
+/// @p x to 3 significant digits, written without an exponent where it has few digits
+/// ("1280", not "1.28e+03").
+std::string rounded(double x)
+{
+    if (!(x > 0) || !std::isfinite(x)) return std::to_string(x);
+    const double step = std::pow(10.0, std::floor(std::log10(x)) - 2);
+    std::ostringstream s;
+    s << std::setprecision(12) << std::round(x / step) * step;
+    return s.str();
+}
+
 /// A suggestion for R when none is given: about 30 median edges (a typical feature size for
 /// scans at their native resolution), capped by a tenth of the bounding-box diagonal.
 std::string radiusHint(const std::string& input)
@@ -288,14 +299,13 @@ std::string radiusHint(const std::string& input)
             // docs/terrain.md), at most a tenth of the extent.
             const DemSource dem(input, {});
             const RasterGeoreference& g = dem.info().georeference;
-            const std::array<double, 6>& t = g.transform;
-            const double cell = std::min(std::hypot(t[1], t[4]), std::hypot(t[2], t[5]));
+            const double cell = shortestCellStep(g);
             const double extent = std::hypot(g.width * cell, g.height * cell);
             const double suggestion = std::min(15.0 * cell, 0.1 * extent);
             std::ostringstream s;
-            s << std::setprecision(3) << "; for " << fs::path(input).filename().string() << " (cells of " << cell << " "
-              << g.units << ", " << g.width * cell << " x " << g.height * cell << ") try --radius " << suggestion
-              << " and make R about the size of the largest feature to detect";
+            s << "; for " << fs::path(input).filename().string() << " (cells of " << rounded(cell) << " " << g.units
+              << ", " << rounded(g.width * cell) << " x " << rounded(g.height * cell) << ") try --radius "
+              << rounded(suggestion) << " and make R about the size of the largest feature to detect";
             return s.str();
         }
         const ReadMeshResult read = readMesh(input);

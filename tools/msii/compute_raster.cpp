@@ -38,9 +38,7 @@ int demScales(const ComputeArgs& args, const std::string& input)
     DemReadOptions ro;
     ro.band = args.band;
     const DemSource dem(input, ro);
-    const RasterGeoreference& g = dem.info().georeference;
-    const double cell = std::min(std::hypot(g.transform[1], g.transform[4]), std::hypot(g.transform[2], g.transform[5]));
-    return std::clamp(int(std::floor(args.radius / cell + 1e-9)), 4, 16);
+    return std::clamp(int(std::floor(args.radius / shortestCellStep(dem.info().georeference) + 1e-9)), 4, 16);
 }
 
 } // namespace

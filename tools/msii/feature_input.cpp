@@ -103,7 +103,7 @@ FeatureMesh featureMeshFromRaster(const std::string& path)
     DemMesh dm = demToMesh(dem);
     FeatureMesh out;
     out.mesh = std::move(dm.mesh);
-    out.cellSize = std::min(std::hypot(g.transform[1], g.transform[4]), std::hypot(g.transform[2], g.transform[5]));
+    out.cellSize = shortestCellStep(g);
     for (std::size_t k = 0; k < raster.bands.size(); ++k) {
         if (k == heightBand) continue;
         VertexProperty p{raster.bands[k].name.empty() ? "band_" + std::to_string(k + 1) : raster.bands[k].name,

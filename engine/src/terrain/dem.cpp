@@ -104,6 +104,12 @@ std::string crsWkt(const std::string& definition)
     return out;
 }
 
+double shortestCellStep(const RasterGeoreference& grid)
+{
+    const std::array<double, 6>& t = grid.transform;
+    return std::min(std::hypot(t[1], t[4]), std::hypot(t[2], t[5]));
+}
+
 RasterRegion regionOfPart(const std::string& mosaic, const std::string& part)
 {
     namespace fs = std::filesystem;

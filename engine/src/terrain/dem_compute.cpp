@@ -179,14 +179,13 @@ WindowLayout layWindows(const DemSource& source, const std::string& input, const
 {
     const InvariantsOptions& asked = options.compute.invariants;
     const RasterGeoreference& grid = source.info().georeference;
-    const std::array<double, 6>& t = grid.transform;
     WindowLayout w;
     w.width = grid.width, w.height = grid.height;
     w.options = options.compute;
     if (w.options.maxHolePerimeter < 0) w.options.maxHolePerimeter = defaultMaxHolePerimeter(asked.radius);
     w.options.tiling = TilingOptions();  // each window in one piece
     // The shortest step between neighbouring cell centres on the ground.
-    const double cell = std::min(std::hypot(t[1], t[4]), std::hypot(t[2], t[5]));
+    const double cell = shortestCellStep(grid);
     w.cell = cell;
     const double budget =
         options.compute.tiling.memoryBudget > 0 ? options.compute.tiling.memoryBudget : kDefaultDemMemoryBudget;

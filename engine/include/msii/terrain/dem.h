@@ -78,6 +78,10 @@ std::string crsWkt(const std::string& definition);
 /// exceptions around Norway and Svalbard). For the hint to a DEM in degrees.
 std::string utmCrsFor(double longitude, double latitude);
 
+/// The shortest step between neighbouring cell centres of @p grid on the ground (its cells
+/// may be rectangular or rotated).
+double shortestCellStep(const RasterGeoreference& grid);
+
 /// Cells [col, col + cols) × [row, row + rows) of a raster; cols = 0: all of it.
 struct RasterRegion {
     int col = 0, row = 0, cols = 0, rows = 0;
