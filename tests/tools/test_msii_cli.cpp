@@ -809,3 +809,35 @@ TEST(MsiiCli, GeoreferencedCoordinatesWork)
     ASSERT_GT(n, mesh.numVertices());
     EXPECT_LE(sum / double(n), 1e-3);
 }
+
+// --progress-lines: for a program that runs msii (the QGIS plugin), progress as lines
+// "msii: progress PERCENT STAGE" on stderr though it is a pipe, each stage ending at 100.0;
+// without it a pipe gets none. The output is the same either way.
+TEST(MsiiCli, ProgressLinesForProgramsThatRunMsii)
+{
+    const fs::path a = tempDir() / "progress_a.ply", b = tempDir() / "progress_b.ply";
+    RunResult r = runMsii("compute '" + smallPatch() + "' -r 0.5 -n 4 --overwrite --progress-lines -o '" + a.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    std::istringstream lines(r.err);
+    std::string line, stage;
+    std::size_t reports = 0, stagesEnded = 0;
+    while (std::getline(lines, line)) {
+        if (line.rfind("msii: progress ", 0) != 0) continue;
+        ++reports;
+        char* end = nullptr;
+        const double percent = std::strtod(line.c_str() + 15, &end);
+        EXPECT_GE(percent, 0.0) << line;
+        EXPECT_LE(percent, 100.0) << line;
+        ASSERT_EQ(*end, ' ') << line;
+        stage = end + 1;
+        EXPECT_FALSE(stage.empty()) << line;
+        stagesEnded += percent == 100.0;
+    }
+    EXPECT_GE(stagesEnded, 3u) << r.err;  // level set, V and S, P and L at least
+    EXPECT_GT(reports, stagesEnded) << r.err;
+    r = runMsii("compute '" + smallPatch() + "' -r 0.5 -n 4 --overwrite -o '" + b.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err.find("msii: progress "), std::string::npos) << r.err;
+    EXPECT_EQ(readFile(a.string()).size(), readFile(b.string()).size());
+    EXPECT_TRUE(sameFloats(propertiesOf(a)["V_04"], propertiesOf(b)["V_04"]));
+}

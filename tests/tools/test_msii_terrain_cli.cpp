@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "../support/files.h"
@@ -573,4 +574,76 @@ TEST(MsiiTerrain, RadiusSuggestionAndRadiiOfWholeCells)
     r = run(MSII_EXE, "compute '" + demSample() + "' -r 5 -n 4 -q --overwrite --raster-output '" + out.string() + "'");
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(readFile((tempDir() / "whole_cells.msii.json").string()).find("\"scales\": 4"), std::string::npos);
+}
+
+// metric and smooth take msii compute's GeoTIFF and give a GeoTIFF on its grid (for a GIS,
+// e.g. the QGIS plugin): the values of the same commands' PLY on the DEM's mesh, cell for
+// vertex; NaN where a cell has no height; the DEM named, so that render --shade finds it. A
+// GeoTIFF with V at some radii only (the default bands) is refused with the bands to write.
+TEST(MsiiTerrain, MetricAndSmoothWriteGeoTiffsOnTheGrid)
+{
+    const fs::path features = tempDir() / "every.msii.tif";
+    RunResult r = run(MSII_EXE, "compute '" + demSample() + "' -r 5 -n 4 -q --overwrite --bands quality,V "
+                                "--raster-output '" + features.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const fs::path metricTif = tempDir() / "every.metric.tif", metricPly = tempDir() / "every.metric.ply";
+    r = run(MSII_EXE, "metric '" + features.string() + "' -m mahalanobis,l2w -q --overwrite -o '" + metricTif.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = run(MSII_EXE, "metric '" + features.string() + "' -m mahalanobis,l2w -q --overwrite -o '" + metricPly.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const fs::path smoothTif = tempDir() / "every.smooth.tif", smoothPly = tempDir() / "every.smooth.ply";
+    r = run(MSII_EXE, "smooth '" + metricTif.string() + "' --properties quality,f_l2w -k 5 -q --overwrite -o '" +
+                          smoothTif.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = run(MSII_EXE, "smooth '" + metricTif.string() + "' --properties quality,f_l2w -k 5 -q --overwrite -o '" +
+                          smoothPly.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+
+    const RasterImage dem = readRaster(demSample());
+    ReadMeshOptions ro;
+    ro.keepVertexProperties = true;
+    for (const auto& [tif, ply, names] :
+         {std::tuple{metricTif, metricPly, std::vector<std::string>{"quality", "f_mahalanobis", "f_l2w"}},
+          std::tuple{smoothTif, smoothPly, std::vector<std::string>{"quality", "f_l2w"}}}) {
+        SCOPED_TRACE(tif.filename().string());
+        const RasterImage got = readRaster(tif.string());
+        EXPECT_EQ(got.georeference.width, dem.georeference.width);
+        EXPECT_EQ(got.georeference.transform, dem.georeference.transform);
+        ASSERT_EQ(got.bands.size(), names.size());
+        std::map<std::string, std::vector<float>> mesh;
+        for (auto& p : readMesh(ply.string(), ro).vertexProperties) mesh[p.name] = std::move(p.values);
+        for (std::size_t b = 0; b < names.size(); ++b) {
+            EXPECT_EQ(got.bands[b].name, names[b]);
+            ASSERT_TRUE(mesh.count(names[b])) << names[b];
+            // The DEM's mesh has a vertex per cell with a height, in row-major order.
+            std::size_t v = 0, compared = 0;
+            for (std::size_t c = 0; c < got.bands[b].values.size(); ++c) {
+                const float h = dem.bands[0].values[c], x = got.bands[b].values[c];
+                if (std::isnan(h) || h == float(dem.nodata)) {
+                    EXPECT_TRUE(std::isnan(x)) << "cell " << c;
+                    continue;
+                }
+                ASSERT_LT(v, mesh[names[b]].size());
+                const float y = mesh[names[b]][v++];
+                if (std::isnan(x)) continue;  // the PLY writes quality 0 there for viewers
+                EXPECT_EQ(x, y) << names[b] << " cell " << c;
+                ++compared;
+            }
+            EXPECT_EQ(v, mesh[names[b]].size());
+            EXPECT_GT(compared, got.bands[b].values.size() / 2);
+        }
+        const auto& md = got.metadata;
+        EXPECT_NE(std::find(md.begin(), md.end(), std::pair<std::string, std::string>{"MSII_INPUT", "dem.tif"}), md.end());
+    }
+    const fs::path png = tempDir() / "every.metric.png";
+    r = run(MSII_EXE, "render '" + smoothTif.string() + "' --shade --pixels 300 -q --overwrite -o '" + png.string() + "'");
+    EXPECT_EQ(r.code, 0) << r.err;
+
+    const fs::path defaults = tempDir() / "defaults.msii.tif";
+    r = run(MSII_EXE, "compute '" + demSample() + "' -r 5 -n 8 -q --overwrite --raster-output '" + defaults.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = run(MSII_EXE, "metric '" + defaults.string() + "' -q --overwrite");
+    EXPECT_NE(r.code, 0);
+    EXPECT_NE(r.err.find("V at some radii only (V_02, V_04, V_06, V_08)"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("--bands quality,V"), std::string::npos) << r.err;
 }

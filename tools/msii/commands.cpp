@@ -15,6 +15,15 @@ void addCommonOptions(CLI::App* cmd, CommonArgs& args)
     cmd->add_option("-j,--threads", args.threads, "Worker threads (default: all cores)");
     cmd->add_flag("-q,--quiet", args.quiet, "No progress, no summary; errors only");
     cmd->add_flag("--overwrite", args.overwrite, "Replace existing outputs");
+    cmd->add_flag("--progress-lines", args.progressLines,
+                  "Progress as lines 'msii: progress PERCENT STAGE' on stderr, also when it is not a terminal "
+                  "(for programs that run msii and show its progress, such as the QGIS plugin)");
+}
+
+TerminalProgress::Style progressStyle(const CommonArgs& args)
+{
+    if (args.progressLines) return TerminalProgress::Style::Lines;
+    return !args.quiet && stderrIsTerminal() ? TerminalProgress::Style::Line : TerminalProgress::Style::Off;
 }
 
 void addPropertyNamesOption(CLI::App* cmd, std::string& prefix)

@@ -1,6 +1,7 @@
 #pragma once
 // The subcommands of the msii program; each registers its options on a CLI11 app and runs.
 #include <CLI/CLI.hpp>
+#include <msii/core/terminal_progress.h>
 
 #include <functional>
 #include <memory>
@@ -16,12 +17,16 @@ namespace msii::tools {
 struct CommonArgs {
     int threads = 0;             ///< 0 = all cores
     bool quiet = false;          ///< no progress line, no summary; errors only
+    bool progressLines = false;  ///< progress as lines for a program that runs msii, terminal or not
     bool overwrite = false;      ///< replace existing outputs
     std::string propertyPrefix;  ///< --property-names: "" or "scalar_"
 };
 
-/// Registers -j/--threads, -q/--quiet and --overwrite on @p cmd, into @p args.
+/// Registers -j/--threads, -q/--quiet, --overwrite and --progress-lines on @p cmd, into @p args.
 void addCommonOptions(CLI::App* cmd, CommonArgs& args);
+
+/// How the command shows its progress: --progress-lines, else a line on a terminal unless --quiet.
+TerminalProgress::Style progressStyle(const CommonArgs& args);
 
 /// A check of a number option for CLI11's check(): "" where @p allowed(value) holds, else
 /// @p message (CLI11 itself refuses text that is not a number).

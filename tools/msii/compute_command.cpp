@@ -403,7 +403,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     outputs.insert(outputs.end(), gigameshFiles.begin(), gigameshFiles.end());
     checkOutputs(outputs, args.overwrite);
 
-    TerminalProgress terminal(!args.quiet && stderrIsTerminal());
+    TerminalProgress terminal(progressStyle(args));
     RunContext progress(terminal.listener());
     const ReadMeshResult read = readMesh(input);
     const double readSeconds = total.seconds();

@@ -79,7 +79,7 @@ OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, c
                                // Relative to the output's folder: found again when both move together.
                                {"MSII_INPUT", fs::absolute(input).lexically_relative(fs::absolute(output).parent_path()).string()}};
 
-    TerminalProgress terminal(!args.quiet && stderrIsTerminal());
+    TerminalProgress terminal(progressStyle(args));
     RunContext progress(terminal.listener());
     DemComputeResult result;
     try {

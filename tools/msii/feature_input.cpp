@@ -1,6 +1,7 @@
 #include "feature_input.h"
 
 #include <msii/core/errors.h>
+#include <msii/core/version.h>
 #include <msii/io/atomic_file.h>
 #include <msii/io/feature_table.h>
 #include <msii/io/read_mesh.h>
@@ -54,7 +55,13 @@ RasterInput readRasterInput(const std::string& path, bool needHeights)
                                                                                           : g.units;
     for (const RasterBand& b : in.raster.bands)
         if (b.name == "height") in.heights = b.values;
-    if (in.heights.empty() && in.raster.bands.size() == 1) in.heights = in.raster.bands.front().values;
+    // The only band of a DEM is its heights; that of msii's own output (e.g. --bands quality) is not.
+    const bool msiiOutput = std::any_of(in.raster.metadata.begin(), in.raster.metadata.end(),
+                                        [](const auto& kv) { return kv.first == "MSII_VERSION"; });
+    if (in.heights.empty() && in.raster.bands.size() == 1 && !msiiOutput) {
+        in.heights = in.raster.bands.front().values;
+        in.heightsFile = std::filesystem::absolute(path).string();
+    }
     if (in.heights.empty() && needHeights)  // msii compute's GeoTIFFs name their DEM
         for (const auto& [key, named] : in.raster.metadata) {
             if (key != "MSII_INPUT") continue;
@@ -75,6 +82,7 @@ RasterInput readRasterInput(const std::string& path, bool needHeights)
                 r + g.height > s.height)
                 continue;
             in.heights = source.read(c, r, g.width, g.height).heights;
+            in.heightsFile = std::filesystem::absolute(file).lexically_normal().string();
         }
     return in;
 }
@@ -92,7 +100,9 @@ FeatureMesh featureMeshFromRaster(const std::string& path)
     // The bands other than the heights become vertex properties.
     std::size_t heightBand = raster.bands.size();
     for (std::size_t k = 0; k < raster.bands.size(); ++k)
-        if (raster.bands[k].name == "height" || raster.bands.size() == 1) heightBand = k;
+        if (raster.bands[k].name == "height" || (raster.bands.size() == 1 && !in.heightsFile.empty() &&
+                                                  fs::equivalent(in.heightsFile, path)))
+            heightBand = k;
     std::string radii;
     for (const auto& [key, value] : raster.metadata)
         if (key == "MSII_RADII") radii = value;
@@ -104,6 +114,7 @@ FeatureMesh featureMeshFromRaster(const std::string& path)
     FeatureMesh out;
     out.mesh = std::move(dm.mesh);
     out.cellSize = shortestCellStep(g);
+    out.raster = FeatureRaster{g, dm.vertexOfCell, radii, in.heightsFile};
     for (std::size_t k = 0; k < raster.bands.size(); ++k) {
         if (k == heightBand) continue;
         VertexProperty p{raster.bands[k].name.empty() ? "band_" + std::to_string(k + 1) : raster.bands[k].name,
@@ -192,6 +203,36 @@ std::vector<double> parseNumberList(const std::string& text, const std::string& 
         out.push_back(v);
     }
     return out;
+}
+
+void writeFeatureRaster(const std::string& path, const FeatureMesh& in, const std::vector<const VertexProperty*>& bands,
+                        const std::string& description)
+{
+    const FeatureRaster& r = *in.raster;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    std::vector<RasterBand> out;
+    for (const VertexProperty* p : bands) {
+        RasterBand b{p->name, std::vector<float>(r.vertexOfCell.size(), nan)};
+        for (std::size_t c = 0; c < r.vertexOfCell.size(); ++c)
+            if (r.vertexOfCell[c] != DemMesh::kNoVertex) b.values[c] = p->values[r.vertexOfCell[c]];
+        out.push_back(std::move(b));
+    }
+    RasterOutputOptions options;
+    options.description = description;
+    if (!r.radii.empty()) options.metadata.push_back({"MSII_RADII", r.radii});
+    options.metadata.push_back({"MSII_VERSION", versionString()});
+    // Relative to the output's folder, as msii compute writes it: found again when both move together.
+    if (!r.heightsFile.empty())
+        options.metadata.push_back(
+            {"MSII_INPUT",
+             fs::path(r.heightsFile).lexically_relative(fs::absolute(path).parent_path()).string()});
+    writeRaster(path, r.grid, out, options);
+}
+
+std::string featureOutputExtension(const std::string& input, const std::string& output)
+{
+    if (!isRasterInput(input)) return ".ply";
+    return fs::path(output).extension() == ".ply" ? ".ply" : ".tif";
 }
 
 std::string outputPath(const std::string& input, const std::string& output, const std::string& suffix,

@@ -4,16 +4,28 @@
 #include <msii/mesh/trimesh.h>
 #include <msii/terrain/raster_output.h>
 
+#include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace msii::tools {
+
+/// Where a feature mesh read from a raster came from: enough to write results back onto
+/// the raster's grid (writeFeatureRaster).
+struct FeatureRaster {
+    RasterGeoreference grid;
+    std::vector<std::uint32_t> vertexOfCell;  ///< per cell, its vertex, or DemMesh::kNoVertex
+    std::string radii;                        ///< MSII_RADII of msii compute's GeoTIFF, if stated
+    std::string heightsFile;                  ///< the DEM file the heights were read from; empty if a band of the input
+};
 
 struct FeatureMesh {
     TriMesh mesh;
     std::vector<VertexProperty> properties;  ///< every scalar vertex property of the input
     std::vector<std::string> comments;       ///< for the output header
     double cellSize = 0;                     ///< rasters: the distance between cell centres
+    std::optional<FeatureRaster> raster;     ///< set for a raster input
 };
 
 /// A georeferenced raster (a DEM, or the GeoTIFF msii compute writes for one) read for the
@@ -23,7 +35,8 @@ struct FeatureMesh {
 struct RasterInput {
     RasterImage raster;
     std::vector<float> heights;
-    std::string units;  ///< the coordinate system's unit, "m" for metres
+    std::string units;        ///< the coordinate system's unit, "m" for metres
+    std::string heightsFile;  ///< the DEM file the heights come from; empty if a band named "height"
 };
 RasterInput readRasterInput(const std::string& path, bool needHeights);
 
@@ -58,6 +71,17 @@ std::vector<std::size_t> findProperties(const FeatureMesh& in, const std::string
 
 /// Comma-separated finite numbers ("0.5,0.6"). @throw InvalidInputError naming @p option.
 std::vector<double> parseNumberList(const std::string& text, const std::string& option);
+
+/// Writes @p bands, properties of @p in (read from a raster), as float32 bands on the
+/// raster's grid (NaN where a cell has no vertex) to the GeoTIFF @p path, atomically, with
+/// @p description and the input's metadata that other commands read (MSII_RADII; MSII_INPUT,
+/// the DEM, relative to @p path's folder).
+void writeFeatureRaster(const std::string& path, const FeatureMesh& in, const std::vector<const VertexProperty*>& bands,
+                        const std::string& description);
+
+/// The output's extension of a command that writes a feature mesh: ".tif" for a raster
+/// input unless @p output is a PLY, else ".ply".
+std::string featureOutputExtension(const std::string& input, const std::string& output);
 
 /// --output, else <input folder>/<input stem>.<suffix><extension>; checks that it may be
 /// written and has the extension.

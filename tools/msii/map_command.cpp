@@ -67,7 +67,7 @@ int runMap(const MapArgs& args)
     std::string params;
     for (const std::string& c : in.comments) params += (params.empty() ? "" : "\n") + c;
     options.parameters = std::string("msii ") + versionString() + " map --view " + args.view.view + (params.empty() ? "" : "\n" + params);
-    TerminalProgress terminal(!args.quiet && stderrIsTerminal());
+    TerminalProgress terminal(progressStyle(args));
     RunContext progress(terminal.listener());
     const FeatureMapInfo info = writeFeatureMap(output, in.mesh, frame, chosen, options, &progress);
     if (!args.quiet)

@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -19,6 +20,8 @@
 namespace msii::tools {
 
 namespace {
+
+namespace fs = std::filesystem;
 
 struct MetricArgs : CommonArgs {
     std::string input, output;
@@ -127,10 +130,19 @@ int runMetric(const MetricArgs& args)
     const Stopwatch total;
     const std::vector<NamedMetric> metrics = parseMetrics(args);
     const std::vector<Invariant> invariants = parseInvariantList(args.invariants);
-    const std::string output = outputPath(args.input, args.output, "metric", args.overwrite);
+    const std::string output = outputPath(args.input, args.output, "metric", args.overwrite,
+                                          featureOutputExtension(args.input, args.output));
 
     FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
-    const FeatureTable table = featureTableOf(in.properties, in.mesh.numVertices(), invariants);
+    const FeatureTable table = [&] {
+        try {
+            return featureTableOf(in.properties, in.mesh.numVertices(), invariants);
+        } catch (const InvalidInputError& e) {
+            if (!in.raster || std::string(e.what()).find("some radii only") == std::string::npos) throw;
+            throw InvalidInputError(std::string(e.what()) + " (msii compute --bands quality," + args.invariants +
+                                    " writes every radius)");
+        }
+    }();
     std::string referenceText;
     const std::vector<double> reference = parseReference(args.reference, table, in.mesh, referenceText);
 
@@ -152,17 +164,26 @@ int runMetric(const MetricArgs& args)
         }
     }
     add.push_back({"quality", add.front().values});
+    std::vector<std::string> written{"quality"};
+    for (const NamedMetric& m : metrics) written.push_back("f_" + m.name);
     mergeProperties(in.properties, std::move(add));
 
-    WritePlyOptions options;
-    options.propertyPrefix = args.propertyPrefix;
     std::ostringstream comment;
     comment << "msii " << versionString() << " metric " << args.metrics << " of " << args.invariants
-            << " against " << referenceText << "; quality = f_" << metrics.front().name << " (0 where NaN)";
-    options.comments = in.comments;  // keep the provenance (e.g. compute's R and N)
-    options.comments.push_back(comment.str());
-    qualityWithoutNaN(in.properties);
-    writePly(output, in.mesh, in.properties, options);
+            << " against " << referenceText << "; quality = f_" << metrics.front().name;
+    if (fs::path(output).extension() == ".tif") {
+        // On the raster's grid: quality and each metric, NaN where undefined (GIS show nodata).
+        std::vector<const VertexProperty*> bands;
+        for (const std::string& name : written) bands.push_back(&in.properties[findProperty(in, name)]);
+        writeFeatureRaster(output, in, bands, comment.str());
+    } else {
+        WritePlyOptions options;
+        options.propertyPrefix = args.propertyPrefix;
+        options.comments = in.comments;  // keep the provenance (e.g. compute's R and N)
+        options.comments.push_back(comment.str() + " (0 where NaN)");
+        qualityWithoutNaN(in.properties);
+        writePly(output, in.mesh, in.properties, options);
+    }
     if (!args.quiet)
         std::fprintf(stderr, "msii: %s -> %s (%zu vertices, %zu features, reference %s, %.1f s)\n%s",
                      args.input.c_str(), output.c_str(), table.numVertices, table.dimension(),
@@ -178,10 +199,14 @@ std::function<int()> addMetricCommand(CLI::App& app)
     CLI::App* cmd = app.add_subcommand(
         "metric", "One value f per vertex from its feature vectors (distance or similarity to a "
                   "reference, paper Sec. 3.1); writes a PLY with quality = f, f_<metric> per "
-                  "metric, and every property of the input.");
-    cmd->add_option("input", args->input, "Feature PLY written by msii compute (or any mesh with --mat)")
+                  "metric, and every property of the input; for a GeoTIFF from msii compute on a "
+                  "DEM, a GeoTIFF on its grid with the bands quality and f_<metric> (float32).");
+    cmd->add_option("input", args->input,
+                    "Feature PLY or GeoTIFF written by msii compute (or any mesh with --mat)")
         ->required();
-    cmd->add_option("-o,--output", args->output, "Output PLY (default <input stem>.metric.ply)");
+    cmd->add_option("-o,--output", args->output,
+                    "Output PLY (default <input stem>.metric.ply), or for a GeoTIFF input a GeoTIFF "
+                    "(default <input stem>.metric.tif; a .ply name gives the DEM's mesh)");
     cmd->add_option("--mat", args->matFiles,
                     "GigaMesh feature file(s) for the input mesh: *.volume.mat (V), *.surface.mat "
                     "(P); they replace the PLY's V or P features");

@@ -267,7 +267,7 @@ int runRender(const RenderArgs& args)
         options.centered = true, options.center = args.center;
     }
 
-    TerminalProgress terminal(!args.quiet && stderrIsTerminal());
+    TerminalProgress terminal(progressStyle(args));
     RunContext progress(terminal.listener());
     std::string value;
     // Default: quality when the input has it, else the relief (read in one go).

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <sstream>
 
@@ -59,7 +60,8 @@ int runSmooth(const SmoothArgs& args)
 {
     const Stopwatch total;
     const SmoothingOptions options = smoothingOptions(args);
-    const std::string output = outputPath(args.input, args.output, "smooth", args.overwrite);
+    const std::string output = outputPath(args.input, args.output, "smooth", args.overwrite,
+                                          featureOutputExtension(args.input, args.output));
     FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
 
     // Which properties: --all-features (every V_/S_/P_/L_ element and quality), else the list.
@@ -80,20 +82,28 @@ int runSmooth(const SmoothArgs& args)
                      "(%.3g), so with --delta global (the paper's choice) the filter hardly changes "
                      "anything; --delta ring uses each ring's own shortest edge\n",
                      info.globalDelta, info.medianEdge);
-    TerminalProgress terminal(!args.quiet && stderrIsTerminal());
+    TerminalProgress terminal(progressStyle(args));
     RunContext progress(terminal.listener());
     for (std::size_t k : chosen) smoother.smooth(in.properties[k].values, &progress);
 
-    WritePlyOptions plyOptions;
-    plyOptions.propertyPrefix = args.propertyPrefix;
     std::ostringstream comment;
     comment << "msii " << versionString() << " smooth --filter " << args.filter << " --iterations "
             << args.iterations << " --delta " << args.delta << " (delta " << info.globalDelta
             << ") --weights " << args.weights << " --border " << args.border;
-    plyOptions.comments = in.comments;  // keep the provenance (e.g. compute's R and N)
-    plyOptions.comments.push_back(comment.str());
-    qualityWithoutNaN(in.properties);
-    writePly(output, in.mesh, in.properties, plyOptions);
+    if (std::filesystem::path(output).extension() == ".tif") {
+        // On the raster's grid: the smoothed bands, float32 (smoothed values fall between the
+        // 16-bit steps of msii compute's fractions).
+        std::vector<const VertexProperty*> bands;
+        for (std::size_t k : chosen) bands.push_back(&in.properties[k]);
+        writeFeatureRaster(output, in, bands, comment.str());
+    } else {
+        WritePlyOptions plyOptions;
+        plyOptions.propertyPrefix = args.propertyPrefix;
+        plyOptions.comments = in.comments;  // keep the provenance (e.g. compute's R and N)
+        plyOptions.comments.push_back(comment.str());
+        qualityWithoutNaN(in.properties);
+        writePly(output, in.mesh, in.properties, plyOptions);
+    }
     if (!args.quiet)
         std::fprintf(stderr, "msii: %s -> %s (%zu vertices, %zu properties, %d x %s, %.1f s)\n",
                      args.input.c_str(), output.c_str(), in.mesh.numVertices(), chosen.size(),
@@ -109,10 +119,14 @@ std::function<int()> addSmoothCommand(CLI::App& app)
     CLI::App* cmd = app.add_subcommand(
         "smooth", "Fast 1-ring mean or median smoothing (paper Sec. 3.2), repeated k times, of "
                   "quality (default), chosen properties or every feature element; writes a PLY "
-                  "with every property of the input.");
-    cmd->add_option("input", args->input, "PLY with per-vertex values (e.g. from msii metric or compute)")
+                  "with every property of the input; for a GeoTIFF from msii compute on a DEM, a "
+                  "GeoTIFF on its grid with the smoothed bands (float32).");
+    cmd->add_option("input", args->input,
+                    "PLY with per-vertex values (e.g. from msii metric or compute), or a GeoTIFF from them")
         ->required();
-    cmd->add_option("-o,--output", args->output, "Output PLY (default <input stem>.smooth.ply)");
+    cmd->add_option("-o,--output", args->output,
+                    "Output PLY (default <input stem>.smooth.ply), or for a GeoTIFF input a GeoTIFF "
+                    "(default <input stem>.smooth.tif; a .ply name gives the DEM's mesh)");
     cmd->add_option("--mat", args->matFiles,
                     "GigaMesh feature file(s) for the input mesh (*.volume.mat, *.surface.mat)");
     cmd->add_option("--filter", args->filter, "mean (Eq. 16, default) or median (Eq. 17)");

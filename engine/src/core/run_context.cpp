@@ -72,8 +72,13 @@ RunContext::Listener TerminalProgress::listener()
 
 void TerminalProgress::draw(const ProgressUpdate& u)
 {
-    if (!mEnabled) return;
+    if (mStyle == Style::Off) return;
     const double frac = u.total ? std::min(1.0, double(u.done) / double(u.total)) : 1.0;
+    if (mStyle == Style::Lines) {
+        std::fprintf(stderr, "msii: progress %.1f %s\n", u.finished ? 100.0 : 100.0 * frac, u.stage.c_str());
+        std::fflush(stderr);
+        return;
+    }
     if (u.finished)
         std::fprintf(stderr, "\r\033[K%s: done in %.2f s\n", u.stage.c_str(), u.seconds);
     else if (u.done == 0 && u.seconds == 0)

@@ -26,6 +26,15 @@ FeatureTable featureTableOf(const std::vector<VertexProperty>& properties, std::
         int count = 0;
         while (byName.count(featureName(letter, std::size_t(count)))) ++count;
         if (count == 0) {
+            // Some radii only, e.g. a DEM's default bands (V at R/4, R/2, 3R/4 and R).
+            std::string some;
+            for (const VertexProperty& p : properties)
+                if (p.name.size() > 2 && p.name[0] == letter && p.name[1] == '_' &&
+                    std::isdigit(static_cast<unsigned char>(p.name[2])))
+                    some += (some.empty() ? "" : ", ") + p.name;
+            if (!some.empty())
+                throw InvalidInputError(std::string("the input has ") + letter + " at some radii only (" + some +
+                                        "); the metrics need it at every radius, from " + featureName(letter, 0));
             std::string present;
             for (const char c : std::string("VSPL")) {
                 int n = 0;
