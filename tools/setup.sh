@@ -28,8 +28,12 @@ packages=(
 )
 # The tests also run the Snakemake workflow of samples/snakemake, and check GeoTIFFs with gdalinfo.
 [ "$with_tests" = ON ] && packages+=(snakemake gdal-bin)
-# ... and the Python module's tests and its documented example (plots with matplotlib).
-[ "$with_tests" = ON ] && packages+=(python3-pytest python3-matplotlib)
+# ... and the Python module's tests and its documented example (plots with matplotlib),
+# pip install . into a virtual environment (docs/python.md), and the QGIS plugin run headless
+# (docs/terrain.md).
+[ "$with_tests" = ON ] && packages+=(python3-pytest python3-matplotlib
+  python3-venv python3-pip python3-setuptools python3-wheel
+  qgis python3-qgis qgis-providers)
 
 missing=()
 for p in "${packages[@]}"; do
