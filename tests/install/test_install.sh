@@ -23,6 +23,10 @@ cmake --build "$work/examples" -j 2 > "$work/build.log" 2>&1 || { cat "$work/bui
 [ "$(wc -l < "$work/outside.csv")" -gt 100 ] || fail "the example's CSV is too short"
 cmp -s "$work/outside.csv" "$work/inside.csv" || fail "the installed library's example differs from the in-tree one"
 "$prefix/bin/msii" --version > /dev/null || fail "the installed msii does not run"
+# The QGIS plugin, with the file that names the installed program.
+plugin="$prefix/share/msii/qgis/msii_processing"
+[ -f "$plugin/metadata.txt" ] && [ -f "$plugin/program.py" ] || fail "no QGIS plugin in $plugin"
+[ "$(cat "$plugin/msii_program.txt")" = "$prefix/bin/msii" ] || fail "msii_program.txt does not name $prefix/bin/msii"
 PYTHONPATH="$prefix/lib/python3/dist-packages" "$python" -c "import msii, sys; sys.exit(0 if msii.__version__ else 1)" \
   || fail "the installed Python module does not import"
 echo "ok: installed, built examples/ against it, same CSV ($(wc -l < "$work/outside.csv") lines)"
