@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <cstring>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -597,4 +598,38 @@ TEST(ReadMesh, OffAndObjAsRealFilesHaveThem)
     const ReadMeshResult obj = readMesh(dir.file("textured.obj"));
     EXPECT_EQ(obj.mesh.points.size(), 4u);
     EXPECT_EQ(obj.mesh.triangles, (std::vector<Triangle>{{0, 1, 2}, {0, 2, 3}, {0, 2, 3}}));
+}
+
+// An OBJ vertex whose coordinates OpenMesh cannot read (nan, inf, beyond float) is named by
+// its line and number, not reported later as a face pointing past the last vertex.
+TEST(ReadMesh, ObjVertexThatIsNotFiniteIsNamedByItsLine)
+{
+    TempDir dir;
+    const std::string head = "# a scan\nv 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    for (const auto& [name, bad, mentions] :
+         {std::tuple{"nan.obj", "v nan 0 0", "'nan', which is not a finite number"},
+          std::tuple{"inf.obj", "v 0 -inf 0", "'-inf', which is not a finite number"},
+          std::tuple{"huge.obj", "v 0 0 1e308", "'1e308', beyond the range"}}) {
+        writeFile(dir.file(name), head + bad + "\nv 1 1 0\nf 1 2 3\nf 2 5 3\n");
+        try {
+            readMesh(dir.file(name));
+            ADD_FAILURE() << name << " was read";
+        } catch (const InvalidInputError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find("line 5: vertex 4 has the coordinate " + std::string(mentions)), std::string::npos) << what;
+        }
+    }
+    // Vertex normals and texture coordinates are not vertices; ordinary numbers pass.
+    writeFile(dir.file("fine.obj"), head + "vn 0 0 1\nvt 0.5 0.5\nv 1 1 -2.5e-3\nf 1 2 3\nf 2 4 3\n");
+    EXPECT_EQ(readMesh(dir.file("fine.obj")).mesh.numVertices(), 4u);
+}
+
+// Messages that quote a file's bytes stay one printable line.
+TEST(Errors, PrintableLineEscapesControlsAndBrokenUtf8)
+{
+    EXPECT_EQ(printableLine("plain text, π·R and ×"), "plain text, π·R and ×");
+    EXPECT_EQ(printableLine("a\nb\rc\td\x01"), "a\\x0Ab\\x0Dc\\x09d\\x01");
+    EXPECT_EQ(printableLine(std::string("bad \xFF byte \xC3")), "bad \\xFF byte \\xC3");
+    EXPECT_EQ(printableLine("\xC2\x85 next line, \xE2\x80\xA8 separator"), "\\xC2\\x85 next line, \\xE2\\x80\\xA8 separator");
+    EXPECT_EQ(printableLine("\x7F"), "\\x7F");
 }

@@ -20,6 +20,8 @@
 #include <iomanip>
 #include <map>
 #include <sstream>
+
+#include <unistd.h>
 #include <string>
 #include <vector>
 
@@ -840,4 +842,24 @@ TEST(MsiiCli, ProgressLinesForProgramsThatRunMsii)
     EXPECT_EQ(r.err.find("msii: progress "), std::string::npos) << r.err;
     EXPECT_EQ(readFile(a.string()).size(), readFile(b.string()).size());
     EXPECT_TRUE(sameFloats(propertiesOf(a)["V_04"], propertiesOf(b)["V_04"]));
+}
+
+// A temporary file that a killed run left (kill -9) is removed by the next run that writes
+// the same output, if its process no longer runs; another output's, or a running process's,
+// is kept.
+TEST(MsiiCli, StaleTemporaryFilesOfAKilledRunAreRemoved)
+{
+    const fs::path folder = tempDir() / "stale";
+    fs::create_directories(folder);
+    const fs::path out = folder / "out.ply";
+    const fs::path stale = folder / ".out.ply.tmp-999999-0";
+    const fs::path running = folder / (".out.ply.tmp-" + std::to_string(::getpid()) + "-3");
+    const fs::path other = folder / ".other.ply.tmp-999999-0";
+    for (const fs::path& p : {stale, running, other}) writeFile(p.string(), "partial");
+    const RunResult r = runMsii("compute '" + smallPatch() + "' -r 0.5 -n 4 -q -o '" + out.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_TRUE(fs::exists(out));
+    EXPECT_FALSE(fs::exists(stale));
+    EXPECT_TRUE(fs::exists(running));  // this test's own process runs
+    EXPECT_TRUE(fs::exists(other));
 }

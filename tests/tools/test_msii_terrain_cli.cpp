@@ -647,3 +647,76 @@ TEST(MsiiTerrain, MetricAndSmoothWriteGeoTiffsOnTheGrid)
     EXPECT_NE(r.err.find("V at some radii only (V_02, V_04, V_06, V_08)"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("--bands quality,V"), std::string::npos) << r.err;
 }
+
+namespace {
+
+/// A DEM of @p n × @p n cells of 1 m in EPSG:25832: gentle hills of @p heights, whose
+/// @p patch cells (a square from (50, 50)) hold @p value; declares NaN as its only nodata.
+std::string demWith(const std::string& name, int n, float value, int patch, double spikes = 0)
+{
+    RasterGeoreference g;
+    g.width = g.height = n;
+    g.transform = {500000, 1, 0, 5600000, 0, -1};
+    g.crsWkt = crsWkt("EPSG:25832");
+    std::vector<float> z(std::size_t(n) * std::size_t(n));
+    std::uint32_t state = 12345;
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            float h = 300.0f + 3.0f * float(std::sin(x / 13.0)) + 2.0f * float(std::cos(y / 9.0));
+            if (x >= 50 && y >= 50 && x < 50 + patch && y < 50 + patch) h = value;
+            state = state * 1664525u + 1013904223u;
+            if (spikes > 0 && double(state >> 8) / double(1u << 24) < spikes) h = float(state % 4800u);
+            z[std::size_t(y) * std::size_t(n) + std::size_t(x)] = h;
+        }
+    const std::string path = (tempDir() / name).string();
+    writeRaster(path, g, {{"height", z}});
+    return path;
+}
+
+} // namespace
+
+// Heights no terrain has, in a DEM that declares no nodata for them (the float minimum that
+// many tools write, -9999), are nodata, with a warning that names the value, the cells and
+// how to declare it; the output has no value there.
+TEST(MsiiTerrain, UndeclaredNodataIsTakenAsNodataWithAWarning)
+{
+    for (const auto& [value, shown] : {std::pair{-3.4028235e38f, std::string("-3.40282347e+38")},
+                                       std::pair{-9999.0f, std::string("-9999")}}) {
+        SCOPED_TRACE(shown);
+        const std::string dem = demWith("undeclared.tif", 120, value, 10);
+        const fs::path out = tempDir() / "undeclared.msii.tif";
+        const RunResult r = run(MSII_EXE, "compute '" + dem + "' -r 8 --overwrite --raster-output '" + out.string() + "'");
+        ASSERT_EQ(r.code, 0) << r.err;
+        EXPECT_NE(r.err.find("msii: warning: " + dem + ": 100 cells hold " + shown +
+                             ", heights no terrain has, and the raster declares no nodata value for it: taken as nodata"),
+                  std::string::npos)
+            << r.err;
+        EXPECT_NE(r.err.find("gdal_edit.py -a_nodata " + shown), std::string::npos) << r.err;
+        const RasterImage got = readRaster(out.string());
+        const std::vector<float>& quality = got.bands.front().values;
+        EXPECT_TRUE(std::isnan(quality[55 * 120 + 55]));
+        EXPECT_FALSE(std::isnan(quality[20 * 120 + 20]));
+        EXPECT_GT(quality[20 * 120 + 20], 0.3f);  // a hillside's, not that of a cliff 10 km deep
+        EXPECT_LT(quality[20 * 120 + 20], 0.7f);
+        // The other commands read it alike.
+        const fs::path png = tempDir() / "undeclared.png";
+        const RunResult rr = run(MSII_EXE, "render '" + dem + "' --show relief --pixels 200 --overwrite -o '" + png.string() + "'");
+        ASSERT_EQ(rr.code, 0) << rr.err;
+        EXPECT_NE(rr.err.find("100 cells hold " + shown), std::string::npos) << rr.err;
+    }
+}
+
+// A DEM of random heights up to 4.8 km (garbage that a broken file gives) stays within
+// bounded memory: the continuation past its edge, kilometres tall, is not cut into pieces
+// beyond the reach of its cells.
+TEST(MsiiTerrain, NoiseDemStaysInBoundedMemory)
+{
+    const std::string dem = demWith("noise.tif", 60, 0, 0, 1.0);
+    const fs::path out = tempDir() / "noise.msii.tif";
+    const RunResult r = run(MSII_EXE, "compute '" + dem + "' -r 10 -q --overwrite --raster-output '" + out.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::string record = readFile((tempDir() / "noise.msii.json").string());
+    const std::size_t at = record.find("\"peak_memory_bytes\": ");
+    ASSERT_NE(at, std::string::npos) << record;
+    EXPECT_LT(std::stod(record.substr(at + 21)), 600e6) << "before: 2.3 GB";
+}

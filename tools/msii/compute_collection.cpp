@@ -186,7 +186,7 @@ int computeCollection(const ComputeArgs& args, const std::vector<std::string>& i
     // A failed input: one error line, and the reason in its manifest line.
     const auto fail = [&](const std::string& input, nlohmann::json& line, const std::string& why) {
         failed.push_back(input);
-        std::fprintf(stderr, "msii: error: %s: %s\n", input.c_str(), why.c_str());
+        std::fprintf(stderr, "msii: error: %s: %s\n", input.c_str(), printableLine(why).c_str());
         line["status"] = "failed";
         line["error"] = why;
     };

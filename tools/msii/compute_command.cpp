@@ -352,6 +352,12 @@ std::string worded(const Diagnostic& d)
     if (d.kind == "borders_continued") return d.message + " (--border mask gives NaN there instead)";
     if (d.kind == "smallest_radius_below_edge") return d.message + " (raise --radius or lower --scales)";
     if (d.kind == "holes_filled") return d.message + " (--fill-holes sets the largest hole filled; 0 fills none)";
+    if (d.kind == "undeclared_nodata") {
+        std::ostringstream value;
+        value << std::setprecision(9) << float(d.figure("value_1"));  // as stored: gdal_edit must match it exactly
+        return d.message + " (to declare it: gdal_edit.py -a_nodata " + value.str() + " FILE for a GeoTIFF, "
+               "gdal_translate -a_nodata " + value.str() + " IN OUT for any raster)";
+    }
     return d.message;
 }
 
@@ -421,7 +427,7 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     const ComputeResult result = runPipeline(args, input, read.mesh, options, ply, progress);
     if (!args.quiet)
         for (const Diagnostic& d : result.diagnostics)
-            std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), worded(d).c_str());
+            std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), printableLine(worded(d)).c_str());
     ply.finish(result);
     const Stopwatch write;
     if (args.gigamesh) writeGigaMeshFiles(args, input, gigameshFiles, read.mesh, result);

@@ -95,7 +95,7 @@ OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, c
     const RasterGeoreference& grid = result.input.georeference;
     if (!args.quiet)
         for (const Diagnostic& d : result.diagnostics)
-            std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), worded(d).c_str());
+            std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), printableLine(worded(d)).c_str());
 
     nlohmann::json j;
     j["program"] = "msii";

@@ -16,6 +16,8 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <map>
+#include <cstdio>
 #include <limits>
 #include <sstream>
 
@@ -62,6 +64,18 @@ RasterInput readRasterInput(const std::string& path, bool needHeights)
         in.heights = in.raster.bands.front().values;
         in.heightsFile = std::filesystem::absolute(path).string();
     }
+    if (!in.heights.empty()) {
+        // As msii compute reads a DEM (terrain/dem.h): heights no terrain has are nodata.
+        const UndeclaredNodata u = implausibleHeightsToNaN(in.heights, g.metresPerUnit);
+        if (!u.empty()) {
+            std::map<float, std::size_t> counts;
+            for (std::uint8_t k : u.valueOf)
+                if (k) ++counts[u.values[k - 1]];
+            std::vector<std::pair<float, std::size_t>> sorted(counts.begin(), counts.end());
+            std::stable_sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+            in.warnings.push_back(describeUndeclaredNodata(sorted));
+        }
+    }
     if (in.heights.empty() && needHeights)  // msii compute's GeoTIFFs name their DEM
         for (const auto& [key, named] : in.raster.metadata) {
             if (key != "MSII_INPUT") continue;
@@ -81,7 +95,14 @@ RasterInput readRasterInput(const std::string& path, bool needHeights)
             if (std::abs(col - c) > 1e-6 || std::abs(row - r) > 1e-6 || c < 0 || r < 0 || c + g.width > s.width ||
                 r + g.height > s.height)
                 continue;
-            in.heights = source.read(c, r, g.width, g.height).heights;
+            Dem dem = source.read(c, r, g.width, g.height);
+            in.heights = std::move(dem.heights);
+            if (!dem.undeclared.empty()) {
+                std::map<float, std::size_t> counts;
+                for (std::uint8_t k : dem.undeclared.valueOf)
+                    if (k) ++counts[dem.undeclared.values[k - 1]];
+                in.warnings.push_back(describeUndeclaredNodata({counts.begin(), counts.end()}));
+            }
             in.heightsFile = std::filesystem::absolute(file).lexically_normal().string();
         }
     return in;
@@ -115,6 +136,7 @@ FeatureMesh featureMeshFromRaster(const std::string& path)
     out.mesh = std::move(dm.mesh);
     out.cellSize = shortestCellStep(g);
     out.raster = FeatureRaster{g, dm.vertexOfCell, radii, in.heightsFile};
+    out.warnings = in.warnings;
     for (std::size_t k = 0; k < raster.bands.size(); ++k) {
         if (k == heightBand) continue;
         VertexProperty p{raster.bands[k].name.empty() ? "band_" + std::to_string(k + 1) : raster.bands[k].name,
@@ -154,6 +176,13 @@ FeatureMesh readFeatureMesh(const std::string& input, const std::vector<std::str
         mergeProperties(out.properties, std::move(add));
     }
     return out;
+}
+
+void printWarnings(const std::string& input, const std::vector<std::string>& warnings, bool quiet)
+{
+    if (quiet) return;
+    for (const std::string& w : warnings)
+        std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), printableLine(w).c_str());
 }
 
 void qualityWithoutNaN(std::vector<VertexProperty>& properties)

@@ -26,7 +26,11 @@ struct FeatureMesh {
     std::vector<std::string> comments;       ///< for the output header
     double cellSize = 0;                     ///< rasters: the distance between cell centres
     std::optional<FeatureRaster> raster;     ///< set for a raster input
+    std::vector<std::string> warnings;       ///< what reading it changed (a raster's implausible heights)
 };
+
+/// Prints @p warnings as "msii: warning: INPUT: …" lines, unless @p quiet.
+void printWarnings(const std::string& input, const std::vector<std::string>& warnings, bool quiet);
 
 /// A georeferenced raster (a DEM, or the GeoTIFF msii compute writes for one) read for the
 /// feature commands: its bands with nodata as NaN, and its heights: the band named
@@ -37,6 +41,7 @@ struct RasterInput {
     std::vector<float> heights;
     std::string units;        ///< the coordinate system's unit, "m" for metres
     std::string heightsFile;  ///< the DEM file the heights come from; empty if a band named "height"
+    std::vector<std::string> warnings;  ///< e.g. implausible heights taken as nodata
 };
 RasterInput readRasterInput(const std::string& path, bool needHeights);
 

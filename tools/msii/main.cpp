@@ -4,6 +4,7 @@
 /// 2 for wrong usage, 1 for anything else.
 #include "commands.h"
 
+#include <msii/core/errors.h>
 #include <msii/core/version.h>
 
 #include <iostream>
@@ -28,7 +29,7 @@ int main(int argc, char** argv)
     } catch (const CLI::Success& e) {  // --help, --help-all, --version
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
-        std::cerr << "msii: error: " << e.what() << " (see msii --help)\n";
+        std::cerr << "msii: error: " << msii::printableLine(e.what()) << " (see msii --help)\n";
         return 2;
     }
     try {
@@ -44,7 +45,7 @@ int main(int argc, char** argv)
         std::cerr << "msii: error: out of memory (try a larger --voxel-size)\n";
         return 1;
     } catch (const std::exception& e) {
-        std::cerr << "msii: error: " << e.what() << '\n';
+        std::cerr << "msii: error: " << msii::printableLine(e.what()) << '\n';
         return 1;
     }
     return 2;

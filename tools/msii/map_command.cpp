@@ -43,6 +43,7 @@ int runMap(const MapArgs& args)
     options.units = args.units;
     const std::string output = outputPath(args.input, args.output, "map", args.overwrite, ".exr");
     FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
+    printWarnings(args.input, in.warnings, args.quiet);
     if (in.cellSize > 0) {  // a raster: seen from above, a pixel per cell unless asked otherwise
         if (!args.view.viewOption || args.view.viewOption->count() == 0) parseMapView("+z", frameOpts);
         const auto given = [](const CLI::Option* o) { return o && o->count() > 0; };

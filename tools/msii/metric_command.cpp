@@ -134,6 +134,7 @@ int runMetric(const MetricArgs& args)
                                           featureOutputExtension(args.input, args.output));
 
     FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
+    printWarnings(args.input, in.warnings, args.quiet);
     const FeatureTable table = [&] {
         try {
             return featureTableOf(in.properties, in.mesh.numVertices(), invariants);

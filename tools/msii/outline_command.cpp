@@ -36,6 +36,7 @@ int runOutline(const OutlineArgs& args)
     const MapFrameOptions frameOpts = frameOptions(args.view, 1024);
     const std::string output = outputPath(args.input, args.output, "outline", args.overwrite, ".svg");
     FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
+    printWarnings(args.input, in.warnings, args.quiet);
     const VertexProperty& f = in.properties[findProperty(in, args.property)];
     if (args.count > 0) {
         const std::vector<double> p = parseNumberList(args.percentiles, "--percentiles");

@@ -128,9 +128,10 @@ Channels channelsFromMesh(const std::string& path, const std::vector<std::string
 /// than @p pixels on their longer side are reduced by averaging blocks of cells; those at
 /// most half of it are enlarged.
 Channels channelsFromRaster(const std::string& path, const std::string& value, bool needNormals, int pixels,
-                            bool orRelief = false)
+                            bool orRelief, bool quiet)
 {
     const RasterInput in = readRasterInput(path, needNormals || orRelief);
+    printWarnings(path, in.warnings, quiet);
     const RasterGeoreference& g = in.raster.georeference;
     std::vector<std::string> names;
     for (const RasterBand& b : in.raster.bands) names.push_back(b.name.empty() ? "(unnamed)" : b.name);
@@ -276,7 +277,8 @@ int runRender(const RenderArgs& args)
     const bool needNormals = show == "relief" || args.shade;
     Channels ch = isMap      ? channelsFromMap(args.input, wanted, needNormals, automatic)
                   : isRaster ? channelsFromRaster(args.input, wanted, needNormals,
-                                                  args.view.pixels > 0 ? args.view.pixels : kDefaultPixels, automatic)
+                                                  args.view.pixels > 0 ? args.view.pixels : kDefaultPixels, automatic,
+                                                  args.quiet)
                              : channelsFromMesh(args.input, args.matFiles, args.view, wanted, needNormals, &progress, automatic);
     if (automatic) show = ch.data.count("quality") ? "quality" : "relief";
     if (show == "relief") {

@@ -44,6 +44,7 @@ int runSegment(const SegmentArgs& args)
     if (fs::path(table).extension() != ".csv") throw InvalidInputError("the table '" + table + "' must be a .csv file");
     checkOutputs({table}, args.overwrite);
     FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
+    printWarnings(args.input, in.warnings, args.quiet);
     const VertexProperty& f = in.properties[findProperty(in, args.property)];
 
     ComponentOptions options;

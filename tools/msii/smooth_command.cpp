@@ -63,6 +63,7 @@ int runSmooth(const SmoothArgs& args)
     const std::string output = outputPath(args.input, args.output, "smooth", args.overwrite,
                                           featureOutputExtension(args.input, args.output));
     FeatureMesh in = readFeatureMesh(args.input, args.matFiles);
+    printWarnings(args.input, in.warnings, args.quiet);
 
     // Which properties: --all-features (every V_/S_/P_/L_ element and quality), else the list.
     std::vector<std::size_t> chosen;

@@ -296,9 +296,37 @@ private:
     std::atomic<int> mError{0};  // the first errno of the background writes
 };
 
+namespace {
+
+/// Removes the temporary files of @p name in @p folder that a killed run left (`kill -9`, a
+/// machine that went down): names of msii's own pattern, .NAME.tmp-PID-N, for this very
+/// output, whose process no longer runs. A running writer's file is kept, whoever runs it.
+void removeStaleTemporaries(const fs::path& folder, const std::string& name)
+{
+    const std::string prefix = "." + name + ".tmp-";
+    std::error_code ec;
+    for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+        const std::string file = it->path().filename().string();
+        if (file.compare(0, prefix.size(), prefix) != 0) continue;
+        const std::string rest = file.substr(prefix.size());  // PID-N
+        const std::size_t dash = rest.find('-');
+        if (dash == 0 || dash == std::string::npos || dash + 1 == rest.size() ||
+            rest.find_first_not_of("0123456789-") != std::string::npos || rest.find('-', dash + 1) != std::string::npos)
+            continue;
+        const long pid = std::strtol(rest.c_str(), nullptr, 10);
+        if (pid <= 0 || pid == long(::getpid())) continue;
+        if (::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;  // running, or not ours to judge
+        std::error_code ignored;
+        fs::remove(it->path(), ignored);
+    }
+}
+
+} // namespace
+
 AtomicFile::AtomicFile(const std::string& target, Mode mode) : mTarget(target)
 {
     checkTarget(target);
+    removeStaleTemporaries(folderOf(target), fs::path(target).filename().string());
 
     // A per-process counter keeps temporary names unique when several outputs are written
     // to the same folder at once; O_EXCL guarantees we never clobber someone else's file.

@@ -9,6 +9,9 @@
 #include <OpenMesh/Core/System/omstream.hh>
 
 #include <algorithm>
+#include <cstdlib>
+#include <cmath>
+#include <limits>
 #include <cctype>
 #include <cerrno>
 #include <charconv>
@@ -242,9 +245,46 @@ void checkOffComplete(const std::string& path)
                                 " but holds only " + std::to_string(numTokens) + " values).");
 }
 
+/// OpenMesh's OBJ reader drops a vertex whose coordinates it cannot read as floats (nan,
+/// inf, 1e308), so the faces after it point one vertex too far and the user reads about a
+/// face index: name the vertex line instead. Reads the `v` lines only.
+void checkObjVertices(const std::string& path)
+{
+    std::FILE* file = std::fopen(path.c_str(), "rb");
+    if (!file) return;
+    std::string line;
+    std::size_t lineNumber = 0, vertex = 0;
+    int c = 0;
+    while (c != EOF) {
+        line.clear();
+        while ((c = std::fgetc(file)) != EOF && c != '\n') line += char(c);
+        ++lineNumber;
+        if (line.size() < 2 || line[0] != 'v' || !std::isspace(static_cast<unsigned char>(line[1]))) continue;
+        ++vertex;
+        const char* p = line.c_str() + 1;
+        for (int k = 0; k < 3; ++k) {
+            char* end = nullptr;
+            const double x = std::strtod(p, &end);
+            std::string word(p, std::size_t(end - p));
+            word.erase(0, word.find_first_not_of(" \t"));
+            if (end == p) break;  // fewer numbers: OpenMesh's own message
+            if (!std::isfinite(x) || std::abs(x) > double(std::numeric_limits<float>::max())) {
+                std::fclose(file);
+                throw InvalidInputError("'" + path + "' line " + std::to_string(lineNumber) + ": vertex " +
+                                        std::to_string(vertex) + " has the coordinate '" + word + "', " +
+                                        (std::isfinite(x) ? "beyond the range of the OBJ reader's single-precision numbers"
+                                                          : "which is not a finite number"));
+            }
+            p = end;
+        }
+    }
+    std::fclose(file);
+}
+
 ReadMeshResult readWithOpenMesh(const std::string& path, const std::string& format)
 {
     checkReadable(path);
+    if (format == "obj") checkObjVertices(path);
     RawImporter importer;
     bool ok = false;
     {

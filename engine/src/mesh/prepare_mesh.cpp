@@ -246,6 +246,25 @@ std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double 
         Vec3 at;
         double area;
     };
+    const auto cellOf = [&](const Vec3& p) {
+        return std::array<std::int64_t, 3>{std::int64_t(std::floor(p.x / radius)), std::int64_t(std::floor(p.y / radius)),
+                                           std::int64_t(std::floor(p.z / radius))};
+    };
+    const auto keyOf = [](const std::array<std::int64_t, 3>& c) {
+        return std::uint64_t(c[0] & 0x1FFFFF) << 42 | std::uint64_t(c[1] & 0x1FFFFF) << 21 | std::uint64_t(c[2] & 0x1FFFFF);
+    };
+    const std::size_t wanted = count > 0 ? std::min(count, mesh.numVertices()) : mesh.numVertices();
+    // The cells (of side R) next to a vertex asked for: a piece outside them is farther than R
+    // from all of them and adds nothing. Left out, the pieces of fill far from the vertices
+    // (a continuation that rises kilometres past a spiky DEM's edge) take no memory.
+    std::unordered_set<std::uint64_t> near;
+    for (std::size_t v = 0; v < wanted; ++v) {
+        const auto c = cellOf(mesh.points[v]);
+        if (!near.insert(keyOf(c) | (std::uint64_t(1) << 63)).second) continue;  // its block is in already
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz) near.insert(keyOf({c[0] + dx, c[1] + dy, c[2] + dz}));
+    }
     std::vector<Piece> pieces;
     const double pieceSize = radius / 16.0;
     for (std::size_t f = firstFill; f < mesh.numTriangles(); ++f) {
@@ -258,17 +277,13 @@ std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double 
         const Vec3 u = (b - a) / double(m), w = (c - a) / double(m);
         for (int i = 0; i < m; ++i)
             for (int j = 0; i + j < m; ++j) {
-                pieces.push_back({a + u * (i + 1.0 / 3) + w * (j + 1.0 / 3), area});
-                if (i + j + 1 < m) pieces.push_back({a + u * (i + 2.0 / 3) + w * (j + 2.0 / 3), area});
+                const Vec3 first = a + u * (i + 1.0 / 3) + w * (j + 1.0 / 3);
+                if (near.count(keyOf(cellOf(first)))) pieces.push_back({first, area});
+                if (i + j + 1 >= m) continue;
+                const Vec3 second = a + u * (i + 2.0 / 3) + w * (j + 2.0 / 3);
+                if (near.count(keyOf(cellOf(second)))) pieces.push_back({second, area});
             }
     }
-    const auto cellOf = [&](const Vec3& p) {
-        return std::array<std::int64_t, 3>{std::int64_t(std::floor(p.x / radius)), std::int64_t(std::floor(p.y / radius)),
-                                           std::int64_t(std::floor(p.z / radius))};
-    };
-    const auto keyOf = [](const std::array<std::int64_t, 3>& c) {
-        return std::uint64_t(c[0] & 0x1FFFFF) << 42 | std::uint64_t(c[1] & 0x1FFFFF) << 21 | std::uint64_t(c[2] & 0x1FFFFF);
-    };
     std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells;
     for (std::size_t i = 0; i < pieces.size(); ++i) cells[keyOf(cellOf(pieces[i].at))].push_back(std::uint32_t(i));
     // The cells next to a piece: a vertex in none of them is farther than R from every
@@ -282,7 +297,6 @@ std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double 
     }
     const double r2 = radius * radius, disc = M_PI * radius * radius;
     std::vector<float> share(mesh.numVertices(), 0.0f);
-    const std::size_t wanted = count > 0 ? std::min(count, mesh.numVertices()) : mesh.numVertices();
     forEachBlock(wanted, [&](std::size_t, std::size_t begin, std::size_t end) {
         for (std::size_t v = begin; v < end; ++v) {
             const Vec3& p = mesh.points[v];
@@ -332,11 +346,13 @@ void refuseUnrepairable(const TriMesh& input)
     if (input.triangles.empty()) throw InvalidInputError("the mesh has no faces");
     const std::size_t n = input.numVertices();
     if (n >= std::size_t(kNone)) throw InvalidInputError("the mesh has more than 2^32 - 1 vertices");
-    std::size_t nonFinite = 0;
-    for (const Vec3& p : input.points) nonFinite += !isFinite(p);
+    std::size_t nonFinite = 0, first = 0;
+    for (std::size_t i = 0; i < n; ++i)
+        if (!isFinite(input.points[i]) && nonFinite++ == 0) first = i;
     if (nonFinite > 0)
         throw InvalidInputError("the mesh has " + plural(nonFinite, "vertex", "vertices") +
-                                " with NaN or infinite coordinates");
+                                " with NaN or infinite coordinates (the first is vertex " + std::to_string(first) +
+                                ", counting from 0)");
     for (std::size_t f = 0; f < input.numTriangles(); ++f)
         for (std::uint32_t v : input.triangles[f])
             if (v >= n)

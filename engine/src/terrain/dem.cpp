@@ -12,6 +12,8 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <iomanip>
+#include <sstream>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -40,8 +42,9 @@ void describeCrs(const OGRSpatialReference& srs, RasterGeoreference& g)
     if (const char* n = srs.GetName()) g.crsName = n;
     if (const char* code = srs.GetAuthorityCode(nullptr)) g.epsg = code;
     const char* unit = nullptr;
-    srs.GetLinearUnits(&unit);
+    const double metres = srs.GetLinearUnits(&unit);
     if (unit) g.units = unit;
+    if (metres > 0 && std::isfinite(metres)) g.metresPerUnit = metres;
 }
 
 std::string lastGdalError(const std::string& otherwise)
@@ -241,12 +244,54 @@ Dem DemSource::read(int col0, int row0, int cols, int rows) const
     const bool scaled = (hasScale && scale != 1.0) || (hasOffset && offset != 0.0);
     for (float& h : dem.heights) {
         if (!std::isfinite(h) || (mImpl->hasNodata && h == nodata)) h = nan;
-        else {
-            if (scaled) h = float(double(h) * scale + offset);
-            ++dem.numValid;
-        }
+        else if (scaled) h = float(double(h) * scale + offset);
     }
+    dem.undeclared = implausibleHeightsToNaN(dem.heights, g.metresPerUnit);
+    for (float h : dem.heights) dem.numValid += !std::isnan(h);
     return dem;
+}
+
+bool isImplausibleHeight(double h, double metresPerUnit)
+{
+    return std::abs(h) >= 1e30 || h == -9999.0 || h == -99999.0 || h == -32767.0 || h == -32768.0 ||
+           std::abs(h * metresPerUnit) > 12000.0;
+}
+
+UndeclaredNodata implausibleHeightsToNaN(std::vector<float>& heights, double metresPerUnit)
+{
+    UndeclaredNodata found;
+    for (std::size_t c = 0; c < heights.size(); ++c) {
+        const float h = heights[c];
+        if (std::isnan(h) || !isImplausibleHeight(h, metresPerUnit)) continue;
+        if (found.valueOf.empty()) found.valueOf.assign(heights.size(), 0);
+        auto it = std::find(found.values.begin(), found.values.end(), h);
+        if (it == found.values.end()) {
+            if (found.values.size() < 255) it = found.values.insert(found.values.end(), h);
+            else it = found.values.end() - 1;  // beyond 255 distinct values: counted with the last
+        }
+        found.valueOf[c] = std::uint8_t(1 + (it - found.values.begin()));
+        heights[c] = std::numeric_limits<float>::quiet_NaN();
+    }
+    return found;
+}
+
+std::string describeUndeclaredNodata(const std::vector<std::pair<float, std::size_t>>& counts)
+{
+    std::ostringstream out;
+    out << std::setprecision(9);  // a float's every digit: the value to declare as nodata
+    std::size_t shown = 0;
+    for (const auto& [value, cells] : counts) {
+        if (shown == 4) {
+            out << " and other values";
+            break;
+        }
+        out << (shown == 0 ? "" : shown + 1 == counts.size() ? " and " : ", ") << cells
+            << (shown == 0 ? (cells == 1 ? " cell holds " : " cells hold ") : " hold ") << value;
+        ++shown;
+    }
+    out << ", heights no terrain has, and the raster declares no nodata value for "
+        << (counts.size() == 1 ? "it" : "them") << ": taken as nodata";
+    return out.str();
 }
 
 Dem readDem(const std::string& path, const DemReadOptions& options)

@@ -461,6 +461,7 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
     grid.width = w.region.cols, grid.height = w.region.rows;
     RasterPieceWriter writer(output, grid, result.bands, options.output);
     std::size_t ownCellsWithHeight = 0;
+    std::map<float, std::size_t> undeclared;  // implausible heights taken as nodata, own cells only
     const int windows = result.windowsPerRow * result.windowsPerColumn;
     for (int wy = 0; wy < result.windowsPerColumn; ++wy)
         for (int wx = 0; wx < result.windowsPerRow; ++wx) {
@@ -478,9 +479,12 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
                 throw InvalidInputError(fileName(input) +
                                         ": no 2 x 2 block of cells has heights, so there is no surface to compute on");
             stage.restart();
+            const UndeclaredNodata& u = win.dem.undeclared;
             for (int y = win.row; y < win.row + win.rows; ++y)
-                for (int x = win.col; x < win.col + win.cols; ++x)
+                for (int x = win.col; x < win.col + win.cols; ++x) {
                     ownCellsWithHeight += !std::isnan(win.dem.heights[win.boxCell(x, y)]);
+                    if (!u.empty() && u.valueOf[win.boxCell(x, y)] != 0) ++undeclared[u.values[u.valueOf[win.boxCell(x, y)] - 1]];
+                }
             writeOwnCells(win, w.region, cells, writer);
             result.writeSeconds += stage.seconds();
         }
@@ -490,6 +494,16 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
         throw InvalidInputError(fileName(input) + " has no cell with a height (all nodata)");
     result.input.numValid = ownCellsWithHeight;
     result.diagnostics = diagnostics.list();
+    if (!undeclared.empty()) {
+        std::vector<std::pair<float, std::size_t>> counts(undeclared.begin(), undeclared.end());
+        std::stable_sort(counts.begin(), counts.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+        Diagnostic d{"undeclared_nodata", 0, {}, describeUndeclaredNodata(counts)};
+        for (const auto& [value, cells] : counts) {
+            d.count += cells;
+            if (d.figures.size() < 4) d.figures.emplace_back("value_" + std::to_string(d.figures.size() + 1), value);
+        }
+        result.diagnostics.insert(result.diagnostics.begin(), std::move(d));
+    }
     if (std::optional<Diagnostic> d = result.masked.mostlyMasked(result.plan.radii))
         result.diagnostics.push_back(std::move(*d));
     stage.restart();

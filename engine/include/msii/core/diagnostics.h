@@ -16,7 +16,8 @@ struct Diagnostic {
     /// - mesh preparation: "duplicate_faces_removed", "faces_reoriented", "holes_filled"
     ///   (figures largest_perimeter, area_added), "holes_not_filled", "isolated_vertices" ...;
     /// - computation: "smallest_radius_below_edge" (figures radius, median_edge),
-    ///   "mostly_masked" (figures masked_share, largest_radius, radius_with_half).
+    ///   "mostly_masked" (figures masked_share, largest_radius, radius_with_half);
+    /// - DEMs: "undeclared_nodata" (count: cells; figures value_1 … value_4, the heights).
     std::string kind;
     std::size_t count = 0;  ///< what the kind counts (faces, holes, vertices ...); 0 if nothing
     std::vector<std::pair<std::string, double>> figures;  ///< further numbers, by name

@@ -26,4 +26,9 @@ public:
     using Error::Error;
 };
 
+/// @p text as one printable line, for messages that quote bytes of a file: control
+/// characters (newlines included) and bytes that are not UTF-8 become "\xNN", so that an
+/// error stays the one line msii promises.
+std::string printableLine(const std::string& text);
+
 } // namespace msii

@@ -27,11 +27,35 @@ struct RasterGeoreference {
     std::string crsName;      ///< e.g. "ETRS89 / UTM zone 32N"
     std::string epsg;         ///< e.g. "25832", empty if none is known
     std::string units;        ///< the coordinate system's linear unit, e.g. "metre"
+    double metresPerUnit = 1; ///< that unit in metres
 };
 
 struct DemReadOptions {
     int band = 0;  ///< 1-based band to read; 0 = the only band (several are an error)
 };
+
+/// Heights no terrain has, read as nodata where the raster declares none for them
+/// (docs/terrain.md, "Nodata that is not declared"): the float extremes (|h| ≥ 1e30, e.g.
+/// −3.4028235e38, which many tools write), the usual sentinels −9999, −99999, −32767 and
+/// −32768, and heights beyond ±12,000 m (Everest is 8,849 m, the deepest sea −10,935 m).
+/// Each height is judged alone, so every window of a raster judges its cells alike.
+bool isImplausibleHeight(double height, double metresPerUnit);
+
+/// Cells of a read window whose heights were implausible (isImplausibleHeight) and are now
+/// nodata; empty if none.
+struct UndeclaredNodata {
+    std::vector<float> values;          ///< the distinct heights found (at most 255)
+    std::vector<std::uint8_t> valueOf;  ///< per cell: 0, or 1 + the index of its value
+    bool empty() const { return values.empty(); }
+};
+
+/// Replaces implausible heights in @p heights by NaN; which were replaced.
+UndeclaredNodata implausibleHeightsToNaN(std::vector<float>& heights, double metresPerUnit);
+
+/// One sentence on @p counts (height → cells): "100 cells hold -9999 and 12 hold -3.40282e+38,
+/// heights no terrain has, and the raster declares no nodata value for them: they were taken as
+/// nodata".
+std::string describeUndeclaredNodata(const std::vector<std::pair<float, std::size_t>>& counts);
 
 struct Dem {
     RasterGeoreference georeference;
@@ -39,6 +63,7 @@ struct Dem {
     std::size_t numValid = 0;    ///< cells with a height
     int band = 1;                ///< the band read
     int bandsInFile = 1;
+    UndeclaredNodata undeclared; ///< implausible heights taken as nodata
 };
 
 /// A height raster opened once and read in windows (for rasters larger than memory).
