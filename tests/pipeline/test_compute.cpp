@@ -201,3 +201,76 @@ TEST(Pipeline, RefusesWhatItCannotCompute)
     exactTiled.tiling.tilesPerAxis = 2;
     EXPECT_THROW(compute(scanNeedingRepair(), exactTiled), InvalidInputError);
 }
+
+// A scanner spike (one vertex of a closed sphere moved 10^6 away) costs its own faces, not
+// the scan: they are left out with a warning that counts them, the hole they leave is
+// filled, and every other vertex keeps its values, close to those of the sphere without the
+// spike. Long faces of the surface itself (a plane of four triangles next to a fine part)
+// stay. With the check off (DEM windows), the spike is computed with, or refused at once
+// with the memory it would take.
+TEST(Compute, SpikeFacesAreLeftOutAndTheRestKeepsItsValues)
+{
+    samples::SphereOptions so;
+    so.radius = 10.0;
+    so.spacing = 0.5;
+    const TriMesh sphere = samples::makeSphere(so);
+    TriMesh spiked = sphere;
+    spiked.points[100] = {1e6, 0, 0};
+    ComputeOptions o;
+    o.invariants.radius = 2.0;
+    o.invariants.scales = 4;
+    o.invariants.select({Invariant::Volume});
+    const ComputeResult clean = compute(sphere, o), r = compute(spiked, o);
+    const auto left = std::find_if(r.diagnostics.begin(), r.diagnostics.end(),
+                                   [](const Diagnostic& d) { return d.kind == "spike_faces_left_out"; });
+    ASSERT_NE(left, r.diagnostics.end());
+    EXPECT_EQ(left->count, 6u);  // the spike vertex's fan
+    EXPECT_NE(left->message.find("left out 6 faces"), std::string::npos) << left->message;
+    const std::vector<float>& v = r.features[Invariant::Volume][3];
+    const std::vector<float>& c = clean.features[Invariant::Volume][3];
+    EXPECT_TRUE(std::isnan(v[100]));
+    std::size_t compared = 0;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+        if (i == 100) continue;
+        ASSERT_FALSE(std::isnan(v[i])) << i;
+        const double d2 = squaredNorm(sphere.points[i] - sphere.points[100]);
+        if (d2 > 4 * 2.0 * 2.0) {  // beyond the reach of the filled hole: the sphere's values
+            EXPECT_NEAR(v[i], c[i], 1e-6) << i;
+            ++compared;
+        }
+    }
+    EXPECT_GT(compared, v.size() * 9 / 10);
+    for (const Diagnostic& d : clean.diagnostics) EXPECT_NE(d.kind, "spike_faces_left_out");
+
+    // A fine patch beside a plane of two long triangles, 30 times its edge: nothing left out.
+    samples::HeightFieldOptions ho;
+    ho.kind = samples::HeightFieldKind::Tablet;
+    ho.width = 4, ho.height = 4, ho.spacing = 0.1;
+    TriMesh patch = samples::makeHeightField(ho);
+    const std::uint32_t base = std::uint32_t(patch.points.size());
+    for (const Vec3& p : {Vec3{-30, -30, -5}, Vec3{30, -30, -5}, Vec3{30, 30, -5}, Vec3{-30, 30, -5}})
+        patch.points.push_back(p);
+    patch.triangles.push_back({base, base + 1, base + 2});
+    patch.triangles.push_back({base, base + 2, base + 3});
+    ComputeOptions po = o;
+    po.invariants.radius = 0.5;
+    const ComputeResult kept = compute(patch, po);
+    for (const Diagnostic& d : kept.diagnostics) EXPECT_NE(d.kind, "spike_faces_left_out") << d.message;
+
+    // Without the rule, a grid 10^6 wide at a voxel of a third is refused before anything is
+    // allocated; a spike of large area (a fan of long, wide faces) with the memory estimate.
+    o.leaveOutSpikes = false;
+    EXPECT_THROW(compute(spiked, o), InvalidInputError);
+    TriMesh wide = sphere;
+    for (std::size_t i = 0; i < wide.points.size(); ++i)
+        if (wide.points[i].z > 9.0) wide.points[i].z += 2e4;  // the cap pulled up 20 m: a tower of faces
+    o.invariants.memoryLimit = 1e8;  // the tower's 5e5 mm² of faces take about 0.4 GB
+    try {
+        compute(wide, o);
+        ADD_FAILURE() << "the tower was computed";
+    } catch (const InvalidInputError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("the surface would take about"), std::string::npos) << what;
+        EXPECT_NE(what.find("spikes or noise"), std::string::npos) << what;
+    }
+}

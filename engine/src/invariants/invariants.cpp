@@ -68,11 +68,43 @@ InvariantsResult checkComputation(const TriMesh& mesh, const InvariantsOptions& 
 
 } // namespace
 
+double surfaceBytesEstimate(double area, double voxelSize)
+{
+    return kBytesPerSurfaceVoxel * area / (voxelSize * voxelSize);
+}
+
+namespace {
+
+std::string gigabytes(double bytes)
+{
+    std::ostringstream out;
+    out.precision(bytes < 1e10 ? 2 : 3);
+    out << bytes / 1e9 << " GB";
+    return out.str();
+}
+
+/// Refuses, before anything is allocated, a surface whose level set alone would not fit.
+void checkSurfaceMemory(const MeshStats& stats, double voxelSize, double limit)
+{
+    const double estimate = surfaceBytesEstimate(stats.area, voxelSize);
+    if (!(limit > 0) || estimate <= limit) return;
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << "the surface would take about " << gigabytes(estimate) << " (area " << stats.area << " at the voxel size "
+        << voxelSize << ": " << stats.area / (voxelSize * voxelSize) << " voxels of surface), more than the "
+        << gigabytes(limit) << " the computation may use; a surface this much larger than its extent ("
+        << stats.diagonal << " across) comes from spikes or noise in its coordinates or heights";
+    throw InvalidInputError(msg.str());
+}
+
+} // namespace
+
 InvariantsResult planInvariants(const TriMesh& mesh, const InvariantsOptions& options)
 {
     InvariantsResult result = checkComputation(mesh, options);
     if (options.plan) {  // a piece of a surface planned whole
         result.plan = *options.plan;
+        checkSurfaceMemory(result.stats, result.plan.voxelSize, options.exact ? 0 : options.memoryLimit);
         return result;
     }
     const std::vector<double> radii = equidistantRadii(options.radius, options.scales);
@@ -93,6 +125,7 @@ InvariantsResult planInvariants(const TriMesh& mesh, const InvariantsOptions& op
         msg << "the voxel size " << h0 << " is far too small for a surface of area " << result.stats.area;
         throw InvalidInputError(msg.str());
     }
+    checkSurfaceMemory(result.stats, h0, options.exact ? 0 : options.memoryLimit);
     result.plan = makeScalePlan(radii, h0, options.minVoxelsPerRadius, patchLinePrecision(options));
     result.plan.origin = localOrigin((result.stats.bboxMin + result.stats.bboxMax) * 0.5, h0);
     result.plan.vertexSpacing = result.stats.medianEdge;

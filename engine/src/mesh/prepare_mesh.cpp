@@ -10,8 +10,10 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <numeric>
 #include <sstream>
 #include <unordered_map>
@@ -338,6 +340,76 @@ private:
     std::vector<Diagnostic>& mChanges;
 };
 
+struct SpikeFaces {
+    std::size_t faces = 0;  ///< left out
+    double extent = 0;      ///< the diagonal of the central 98 %
+};
+
+/// Leaves out of @p triangles the faces of spike vertices: vertices whose shortest edge is
+/// longer than kSpikeEdgeFactor times the diagonal of the box of the central 98 % of the
+/// corners (the 1st and 99th percentiles on each axis, from at most a million corners at
+/// even steps), and longer than kSpikeNeighbourFactor times the shortest edge of each of
+/// their neighbours. The second test keeps coarse parts of a surface (a plane of a few
+/// long triangles beside a fine scan): their vertices' neighbours have long edges too.
+SpikeFaces leaveOutSpikeFaces(const std::vector<Vec3>& points, std::vector<Triangle>& triangles)
+{
+    SpikeFaces out;
+    const std::size_t corners = 3 * triangles.size();
+    if (corners == 0) return out;
+    const std::size_t step = std::max<std::size_t>(1, corners / 1000000);
+    std::array<std::vector<double>, 3> axis;
+    for (std::size_t c = 0; c < corners; c += step) {
+        const std::uint32_t v = triangles[c / 3][c % 3];
+        if (v >= points.size()) continue;  // refused by the check of the indices
+        for (int a = 0; a < 3; ++a) axis[std::size_t(a)].push_back(points[v][a]);
+    }
+    if (axis[0].empty()) return out;
+    std::array<double, 3> lo{}, hi{};
+    for (std::size_t a = 0; a < 3; ++a) {
+        std::vector<double>& x = axis[a];
+        const std::size_t i = x.size() / 100, j = x.size() - 1 - x.size() / 100;
+        std::nth_element(x.begin(), x.begin() + std::ptrdiff_t(i), x.end());
+        lo[a] = x[i];
+        std::nth_element(x.begin(), x.begin() + std::ptrdiff_t(j), x.end());
+        hi[a] = x[j];
+    }
+    out.extent = norm(Vec3(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]));
+    if (!(out.extent > 0)) return out;
+    const auto valid = [&](const Triangle& t) { return t[0] < points.size() && t[1] < points.size() && t[2] < points.size(); };
+    // Each vertex's shortest edge, then the longest of its neighbours' shortest edges.
+    const double inf = std::numeric_limits<double>::infinity();
+    std::vector<double> shortest(points.size(), inf);
+    for (const Triangle& t : triangles) {
+        if (!valid(t)) continue;
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t a = t[std::size_t(k)], b = t[std::size_t((k + 1) % 3)];
+            const double len = norm(points[a] - points[b]);
+            shortest[a] = std::min(shortest[a], len), shortest[b] = std::min(shortest[b], len);
+        }
+    }
+    const double farEdge = kSpikeEdgeFactor * out.extent;
+    std::vector<double> neighbours(points.size(), 0.0);
+    for (const Triangle& t : triangles) {
+        if (!valid(t)) continue;
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t a = t[std::size_t(k)], b = t[std::size_t((k + 1) % 3)];
+            if (shortest[a] > farEdge) neighbours[a] = std::max(neighbours[a], shortest[b]);
+            if (shortest[b] > farEdge) neighbours[b] = std::max(neighbours[b], shortest[a]);
+        }
+    }
+    const auto spikeVertex = [&](std::uint32_t v) {
+        return shortest[v] > farEdge && shortest[v] > kSpikeNeighbourFactor * neighbours[v];
+    };
+    const std::size_t before = triangles.size();
+    triangles.erase(std::remove_if(triangles.begin(), triangles.end(),
+                                   [&](const Triangle& t) {
+                                       return valid(t) && (spikeVertex(t[0]) || spikeVertex(t[1]) || spikeVertex(t[2]));
+                                   }),
+                    triangles.end());
+    out.faces = before - triangles.size();
+    return out;
+}
+
 /// Step 1: refuses what cannot be repaired (no vertices or faces, too many vertices,
 /// non-finite coordinates, face indices out of range).
 void refuseUnrepairable(const TriMesh& input)
@@ -503,6 +575,18 @@ PrepareMeshResult prepareMesh(const TriMesh& input, const PrepareMeshOptions& op
     TriMesh work;
     work.points = input.points;
     work.triangles = input.triangles;
+    if (options.leaveOutSpikes)
+        if (const SpikeFaces spikes = leaveOutSpikeFaces(input.points, work.triangles); spikes.faces > 0) {
+            std::ostringstream done;
+            done.precision(3);
+            done << "left out " << plural(spikes.faces, "face", "faces") << " of spikes to stray points (vertices "
+                 << "whose every edge is over " << kSpikeEdgeFactor << " times as long as the mesh's central 98 % is wide, "
+                 << spikes.extent << ", and their neighbours' edges far shorter); those vertices get no values, the "
+                    "holes left are filled as others";
+            log.record("spike_faces_left_out", spikes.faces,
+                       plural(spikes.faces, "spike face", "spike faces") + " (edges far longer than the mesh is wide)",
+                       done.str());
+        }
     const std::vector<std::uint32_t> rep = mergeSamePositions(input.points, work.triangles, log);
     MeshCheckResult check = removeFacesWithoutSurface(work, log);
     keepVerticesInFaces(input.points, work.triangles, rep, result);

@@ -20,6 +20,7 @@ PrepareMeshResult prepare(const TriMesh& input, const ComputeOptions& options, C
     const Stopwatch watch;
     PrepareMeshOptions po;
     po.repair = options.repair;
+    po.leaveOutSpikes = options.leaveOutSpikes;
     po.radius = options.invariants.radius;
     po.maxHolePerimeter =
         options.maxHolePerimeter >= 0 ? options.maxHolePerimeter : defaultMaxHolePerimeter(options.invariants.radius);
@@ -250,6 +251,9 @@ ComputeResult run(const TriMesh& input, const ComputeOptions& options, const Pie
     PrepareMeshResult prepared = prepare(input, options, result);
     InvariantsOptions invariants = onPrepared(options, prepared);
     const std::optional<InvariantsResult> planned = continueBorders(prepared, options, invariants, result);
+    // The memory the level set may take, checked before it is built: the machine's, or the
+    // budget a DEM window sets. Tiles are sized to their budget by the tiling itself.
+    if (invariants.memoryLimit == 0 && !options.tiling.tiled()) invariants.memoryLimit = defaultMemoryLimit();
     if (options.tiling.tiled())
         computeTiled(prepared, invariants, options.tiling, input.numVertices(), sink, result, context);
     else

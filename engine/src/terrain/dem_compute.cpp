@@ -160,6 +160,7 @@ ScalePlan sharedPlan(const DemSource& source, const std::string& input, const Co
         throw InvalidInputError(fileName(input) + ": the window at its centre has no surface to plan the computation on");
     PrepareMeshOptions po;
     po.repair = options.repair;
+    po.leaveOutSpikes = false;  // as the windows (below)
     po.radius = options.invariants.radius;
     po.maxHolePerimeter = options.maxHolePerimeter;
     const InvariantsResult planned = planInvariants(prepareMesh(pm.mesh, po).mesh, options.invariants);
@@ -184,11 +185,14 @@ WindowLayout layWindows(const DemSource& source, const std::string& input, const
     w.options = options.compute;
     if (w.options.maxHolePerimeter < 0) w.options.maxHolePerimeter = defaultMaxHolePerimeter(asked.radius);
     w.options.tiling = TilingOptions();  // each window in one piece
+    // A DEM's spikes are heights: every window must judge its cells alike, whatever its extent.
+    w.options.leaveOutSpikes = false;
     // The shortest step between neighbouring cell centres on the ground.
     const double cell = shortestCellStep(grid);
     w.cell = cell;
     const double budget =
         options.compute.tiling.memoryBudget > 0 ? options.compute.tiling.memoryBudget : kDefaultDemMemoryBudget;
+    w.options.invariants.memoryLimit = budget;  // a window whose surface exceeds it stops at once
     const double cellsPerWindow = budget / computationBytesPerVertex(asked);
     w.oneWindow = options.windowCells == 0 ? double(w.width) * double(w.height) <= cellsPerWindow
                                            : options.windowCells >= std::max(w.width, w.height);

@@ -1,5 +1,7 @@
 #include <msii/tiling/tiled_compute.h>
 
+#include <unistd.h>
+
 #include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
 #include <msii/invariants/patch_line.h>
@@ -154,6 +156,12 @@ double computationBytesPerVertex(const InvariantsOptions& options)
 {
     const double atSixteen = options.computePatch || options.computeLine ? 1700.0 : 1200.0;
     return atSixteen * std::max(1.0, options.scales / 16.0);
+}
+
+double defaultMemoryLimit()
+{
+    const long pages = ::sysconf(_SC_PHYS_PAGES), pageSize = ::sysconf(_SC_PAGE_SIZE);
+    return pages > 0 && pageSize > 0 ? 0.75 * double(pages) * double(pageSize) : 0.0;
 }
 
 double haloWidth(const ScalePlan& plan) { return plan.reach + 4.0 * plan.voxelSize; }

@@ -28,9 +28,22 @@
 
 namespace msii {
 
+/// A vertex is the tip of a spike (PrepareMeshOptions::leaveOutSpikes) when its shortest
+/// edge is longer than kSpikeEdgeFactor times the diagonal of the mesh's central 98 % (no
+/// face of a surface is ten times longer than the surface is wide) and longer than
+/// kSpikeNeighbourFactor times the shortest edge of each of its neighbours (a coarse part of
+/// the surface has coarse neighbours).
+constexpr double kSpikeEdgeFactor = 10.0;
+constexpr double kSpikeNeighbourFactor = 100.0;
+
 struct PrepareMeshOptions {
     /// Repair what steps 2-6 repair; false refuses such meshes instead (InvalidInputError).
     bool repair = true;
+    /// Leave out the faces of spike tips (kSpikeEdgeFactor, kSpikeNeighbourFactor): spikes
+    /// to stray points (docs/limits.md, Spikes). Their tips are left in no face (NaN), the
+    /// holes they leave filled as others. Off for DEM windows, whose spikes are
+    /// heights: a window's own extent must not decide what a cell is.
+    bool leaveOutSpikes = true;
     /// Fill border loops up to this length (mesh units); 0 fills none.
     double maxHolePerimeter = 0;
     /// Radius of the ball for filledShare (the largest radius R); 0 = no filledShare.

@@ -53,6 +53,8 @@ struct ComputeOptions {
     /// Repair what mesh preparation repairs (PrepareMeshOptions::repair); false refuses such
     /// meshes instead.
     bool repair = true;
+    /// Leave out the faces of spikes (PrepareMeshOptions::leaveOutSpikes); off for DEM windows.
+    bool leaveOutSpikes = true;
     /// Fill holes whose border is at most this long (mesh units); -1 = πR
     /// (defaultMaxHolePerimeter), 0 = none.
     double maxHolePerimeter = -1;

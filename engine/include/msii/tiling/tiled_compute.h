@@ -42,6 +42,10 @@ struct TilingOptions {
 /// The memory budget of a DEM computed without one (TilingOptions::memoryBudget = 0).
 constexpr double kDefaultDemMemoryBudget = 3e9;
 
+/// The memory a computation without a budget may take: three quarters of the machine's
+/// (InvariantsOptions::memoryLimit).
+double defaultMemoryLimit();
+
 /// Peak bytes per vertex of one piece's computation with these options: 1,700 with P or L at
 /// N = 16 (a little above the 1.1M-vertex benchmark's, docs/performance.md), 1,200 with V
 /// and S alone (measured on 1M-cell DEMs, docs/terrain.md), in proportion above N = 16. Tiles
