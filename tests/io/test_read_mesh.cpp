@@ -632,4 +632,7 @@ TEST(Errors, PrintableLineEscapesControlsAndBrokenUtf8)
     EXPECT_EQ(printableLine(std::string("bad \xFF byte \xC3")), "bad \\xFF byte \\xC3");
     EXPECT_EQ(printableLine("\xC2\x85 next line, \xE2\x80\xA8 separator"), "\\xC2\\x85 next line, \\xE2\\x80\\xA8 separator");
     EXPECT_EQ(printableLine("\x7F"), "\\x7F");
+    // Format characters (U+0603, U+200B) escaped; letters of names kept.
+    EXPECT_EQ(printableLine("Tafel_Zürich_ΑΩ_Москва ≥ 2 m²"), "Tafel_Zürich_ΑΩ_Москва ≥ 2 m²");
+    EXPECT_EQ(printableLine("a\xD8\x83" "b\xE2\x80\x8B" "c"), "a\\xD8\\x83b\\xE2\\x80\\x8Bc");
 }

@@ -1,8 +1,29 @@
 #include <msii/core/errors.h>
 
+#include <cstdint>
 #include <cstdio>
 
 namespace msii {
+
+namespace {
+
+bool readable(std::uint32_t cp)
+{
+    static constexpr std::uint32_t kRanges[][2] = {
+        {0x00A1, 0x00AC}, {0x00AE, 0x017F},                     // Latin-1 signs and letters (no soft hyphen)
+        {0x0391, 0x03A1}, {0x03A3, 0x03A9}, {0x03B1, 0x03C9},   // Greek letters
+        {0x0400, 0x045F},                                       // Cyrillic
+        {0x2010, 0x2027}, {0x2030, 0x205E},                     // dashes, quotes, bullets, ellipsis, primes
+        {0x2070, 0x2071}, {0x2074, 0x208E},                     // super- and subscripts
+        {0x2190, 0x22FF}, {0x25A0, 0x25FF},                     // arrows, mathematical operators, shapes
+        {0x4E00, 0x9FFF},                                       // CJK ideographs
+    };
+    for (const auto& r : kRanges)
+        if (cp >= r[0] && cp <= r[1]) return true;
+    return false;
+}
+
+} // namespace
 
 std::string printableLine(const std::string& text)
 {
@@ -33,12 +54,15 @@ std::string printableLine(const std::string& text)
             const unsigned char d = static_cast<unsigned char>(text[i + 1]);
             ok = !(c == 0xF0 && d < 0x90) && !(c == 0xF4 && d >= 0x90);
         }
-        // C1 control characters (U+0080 … U+009F) and the line and paragraph separators
-        // (U+2028, U+2029) would break the line too.
-        if (ok && n == 2 && c == 0xC2 && static_cast<unsigned char>(text[i + 1]) < 0xA0) ok = false;
-        if (ok && n == 3 && c == 0xE2 && static_cast<unsigned char>(text[i + 1]) == 0x80 &&
-            (static_cast<unsigned char>(text[i + 2]) & 0xFE) == 0xA8)
-            ok = false;
+        // Of the other characters, those of the scripts and signs people and msii's messages
+        // write (Latin, Greek, Cyrillic letters; dashes, quotes, arrows, mathematical signs,
+        // shapes; CJK ideographs): not the control, format, separator and unassigned code
+        // points that would break or hide part of the line.
+        if (ok) {
+            std::uint32_t cp = c & (n == 2 ? 0x1F : n == 3 ? 0x0F : 0x07);
+            for (std::size_t k = 1; k < n; ++k) cp = (cp << 6) | (static_cast<unsigned char>(text[i + k]) & 0x3F);
+            ok = readable(cp);
+        }
         if (!ok) {
             escape(c);
             ++i;

@@ -247,7 +247,8 @@ void checkOffComplete(const std::string& path)
 
 /// OpenMesh's OBJ reader drops a vertex whose coordinates it cannot read as floats (nan,
 /// inf, 1e308), so the faces after it point one vertex too far and the user reads about a
-/// face index: name the vertex line instead. Reads the `v` lines only.
+/// face index: name the vertex line instead. And it aborts on a face corner without a
+/// vertex index ("/2/2"): refuse that first. Reads the `v` and `f` lines only.
 void checkObjVertices(const std::string& path)
 {
     std::FILE* file = std::fopen(path.c_str(), "rb");
@@ -259,6 +260,25 @@ void checkObjVertices(const std::string& path)
         line.clear();
         while ((c = std::fgetc(file)) != EOF && c != '\n') line += char(c);
         ++lineNumber;
+        if (line.size() >= 2 && line[0] == 'f' && std::isspace(static_cast<unsigned char>(line[1]))) {
+            // Every corner (v, v/vt, v//vn, v/vt/vn) starts with its vertex index: OpenMesh's
+            // reader aborts the program on a face whose corners have none.
+            std::size_t at = 1;
+            while (true) {
+                at = line.find_first_not_of(" \t\r", at);
+                if (at == std::string::npos) break;
+                const std::size_t end = std::min(line.find_first_of(" \t\r", at), line.size());
+                const std::string corner = line.substr(at, end - at);
+                const std::size_t digits = corner.find_first_not_of("+-0123456789");
+                if (digits == 0 || corner == "-" || corner == "+") {
+                    std::fclose(file);
+                    throw InvalidInputError("'" + path + "' line " + std::to_string(lineNumber) + ": the face corner '" +
+                                            corner + "' has no vertex index");
+                }
+                at = end;
+            }
+            continue;
+        }
         if (line.size() < 2 || line[0] != 'v' || !std::isspace(static_cast<unsigned char>(line[1]))) continue;
         ++vertex;
         const char* p = line.c_str() + 1;
