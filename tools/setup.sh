@@ -27,7 +27,7 @@ packages=(
   libgtest-dev
 )
 # The tests also run the Snakemake workflow of samples/snakemake, and check GeoTIFFs with gdalinfo.
-[ "$with_tests" = ON ] && packages+=(snakemake gdal-bin)
+[ "$with_tests" = ON ] && packages+=(snakemake gdal-bin python3-gdal)
 # ... and the Python module's tests and its documented example (plots with matplotlib),
 # pip install . into a virtual environment (docs/python.md), and the QGIS plugin run headless
 # (docs/terrain.md).

@@ -9,6 +9,7 @@
 #include <OpenMesh/Core/System/omstream.hh>
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdlib>
 #include <cmath>
 #include <limits>
@@ -458,6 +459,28 @@ bool isBinaryOff(const std::string& text)
     return text.substr(0, end).find("BINARY") != std::string::npos;
 }
 
+/// Binary OFF (Geomview's: big-endian counts after the keyword line): counts the file cannot
+/// hold are refused before OpenMesh allocates for them (a flipped byte declaring 200 million
+/// vertices in a file of 75 bytes).
+void checkBinaryOffCounts(const std::string& path, const std::string& text)
+{
+    const std::size_t line = text.find('\n', text.find("BINARY"));
+    if (line == std::string::npos || line + 13 > text.size()) return;  // OpenMesh says it is malformed
+    const auto bigEndian = [&](std::size_t at) {
+        std::uint32_t v = 0;
+        for (int k = 0; k < 4; ++k) v = (v << 8) | static_cast<unsigned char>(text[at + std::size_t(k)]);
+        return v;
+    };
+    const std::uint64_t nv = bigEndian(line + 1), nf = bigEndian(line + 5);
+    // Three floats per vertex; a count and three indices per face.
+    const std::uint64_t needed = line + 13 + 12 * nv + 16 * nf;
+    if (needed > text.size())
+        throw InvalidInputError("unexpected end of file in '" + path + "' (it declares " + std::to_string(nv) +
+                                (nv == 1 ? " vertex and " : " vertices and ") + std::to_string(nf) +
+                                (nf == 1 ? " face" : " faces") + ", at least " + std::to_string(needed) +
+                                " bytes, but is " + std::to_string(text.size()) + " bytes long).");
+}
+
 } // namespace
 
 ReadMeshResult readMesh(const std::string& path, const ReadMeshOptions& options)
@@ -478,6 +501,7 @@ ReadMeshResult readMesh(const std::string& path, const ReadMeshOptions& options)
             std::fclose(file);
         }
         if (!isBinaryOff(text)) return readOffAscii(path, text);
+        checkBinaryOffCounts(path, text);
     }
     if (extension == ".obj" || extension == ".off" || extension == ".stl")
         return readWithOpenMesh(path, extension.substr(1));

@@ -347,27 +347,32 @@ struct SpikeFaces {
 
 /// Leaves out of @p triangles the faces of spike vertices: vertices whose shortest edge is
 /// longer than kSpikeEdgeFactor times the diagonal of the box of the central 98 % of the
-/// corners (the 1st and 99th percentiles on each axis, from at most a million corners at
-/// even steps), and longer than kSpikeNeighbourFactor times the shortest edge of each of
+/// vertices in faces (the 1st and 99th percentiles on each axis, at least one vertex off each
+/// end; from at most a million vertices at even steps), and longer than kSpikeNeighbourFactor times the shortest edge of each of
 /// their neighbours. The second test keeps coarse parts of a surface (a plane of a few
 /// long triangles beside a fine scan): their vertices' neighbours have long edges too.
 SpikeFaces leaveOutSpikeFaces(const std::vector<Vec3>& points, std::vector<Triangle>& triangles)
 {
     SpikeFaces out;
-    const std::size_t corners = 3 * triangles.size();
-    if (corners == 0) return out;
-    const std::size_t step = std::max<std::size_t>(1, corners / 1000000);
+    if (triangles.empty()) return out;
+    // The vertices in faces, each once, at most a million at even steps.
+    std::vector<char> used(points.size(), 0);
+    std::size_t numUsed = 0;
+    for (const Triangle& t : triangles)
+        for (std::uint32_t v : t)
+            if (v < points.size() && !used[v]) used[v] = 1, ++numUsed;  // others: refused by the index check
+    if (numUsed < 4) return out;
+    const std::size_t step = std::max<std::size_t>(1, numUsed / 1000000);
     std::array<std::vector<double>, 3> axis;
-    for (std::size_t c = 0; c < corners; c += step) {
-        const std::uint32_t v = triangles[c / 3][c % 3];
-        if (v >= points.size()) continue;  // refused by the check of the indices
-        for (int a = 0; a < 3; ++a) axis[std::size_t(a)].push_back(points[v][a]);
-    }
-    if (axis[0].empty()) return out;
+    for (std::size_t v = 0, k = 0; v < points.size(); ++v)
+        if (used[v] && k++ % step == 0)
+            for (int a = 0; a < 3; ++a) axis[std::size_t(a)].push_back(points[v][a]);
     std::array<double, 3> lo{}, hi{};
     for (std::size_t a = 0; a < 3; ++a) {
         std::vector<double>& x = axis[a];
-        const std::size_t i = x.size() / 100, j = x.size() - 1 - x.size() / 100;
+        // At least one vertex off each end, so that a small mesh's one spike is outside too.
+        const std::size_t trim = std::min(std::max<std::size_t>(1, x.size() / 100), (x.size() - 1) / 2);
+        const std::size_t i = trim, j = x.size() - 1 - trim;
         std::nth_element(x.begin(), x.begin() + std::ptrdiff_t(i), x.end());
         lo[a] = x[i];
         std::nth_element(x.begin(), x.begin() + std::ptrdiff_t(j), x.end());

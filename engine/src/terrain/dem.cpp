@@ -205,6 +205,16 @@ DemSource::DemSource(const std::string& path, const DemReadOptions& options) : m
                                 "-t_srs " + target + " -r bilinear " + name + " " + stem + "_utm.tif");
     }
     detail::describeCrs(*srs, g);
+    // Cells beyond 10^12 units from the origin are in no coordinate system of the Earth; double
+    // precision could not tell the cells there apart either.
+    const std::array<double, 6>& t = g.transform;
+    for (const double corner : {t[0], t[3], t[0] + g.width * t[1] + g.height * t[2], t[3] + g.width * t[4] + g.height * t[5]})
+        if (!std::isfinite(corner) || std::abs(corner) > 1e12) {
+            std::ostringstream where;
+            where << corner;
+            throw InvalidInputError(name + " has broken georeferencing: its cells reach the coordinate " + where.str() +
+                                    ", beyond any coordinate system of the Earth");
+        }
     const double det = g.transform[1] * g.transform[5] - g.transform[2] * g.transform[4];
     if (!(std::abs(det) > 0) || !std::isfinite(det)) throw InvalidInputError(name + " has a degenerate geotransform");
     int hasNodata = 0;
