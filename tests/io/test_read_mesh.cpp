@@ -636,3 +636,20 @@ TEST(Errors, PrintableLineEscapesControlsAndBrokenUtf8)
     EXPECT_EQ(printableLine("Tafel_Zürich_ΑΩ_Москва ≥ 2 m²"), "Tafel_Zürich_ΑΩ_Москва ≥ 2 m²");
     EXPECT_EQ(printableLine("a\xD8\x83" "b\xE2\x80\x8B" "c"), "a\\xD8\\x83b\\xE2\\x80\\x8Bc");
 }
+
+// Indices as the file has them: OBJ's 0 (it counts from 1), an OFF index written inf.
+TEST(ReadMesh, BadFaceIndicesAreNamedAsWritten)
+{
+    TempDir dir;
+    writeFile(dir.file("zero.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0/1 2/2 3/3\n");
+    writeFile(dir.file("inf.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 inf\n");
+    for (const auto& [name, mentions] : {std::pair{"zero.obj", "line 4: the face corner '0/1' has the vertex index 0"},
+                                         std::pair{"inf.off", "vertex index inf in face 1"}}) {
+        try {
+            readMesh(dir.file(name));
+            ADD_FAILURE() << name << " was read";
+        } catch (const InvalidInputError& e) {
+            EXPECT_NE(std::string(e.what()).find(mentions), std::string::npos) << e.what();
+        }
+    }
+}

@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <iostream>
 #include <mutex>
+#include <sstream>
 #include <streambuf>
 #include <string_view>
 #include <vector>
@@ -276,6 +277,11 @@ void checkObjVertices(const std::string& path)
                     throw InvalidInputError("'" + path + "' line " + std::to_string(lineNumber) + ": the face corner '" +
                                             corner + "' has no vertex index");
                 }
+                if (std::strtol(corner.c_str(), nullptr, 10) == 0) {  // OBJ counts from 1 (or back from -1)
+                    std::fclose(file);
+                    throw InvalidInputError("'" + path + "' line " + std::to_string(lineNumber) + ": the face corner '" +
+                                            corner + "' has the vertex index 0 (OBJ counts vertices from 1)");
+                }
                 at = end;
             }
             continue;
@@ -439,10 +445,12 @@ ReadMeshResult readOffAscii(const std::string& path, const std::string& text)
         std::vector<std::uint32_t> polygon(n);
         for (std::size_t k = 0; k < n; ++k) {
             const double v = all[k + 1];
-            if (!(v >= 0) || v >= double(nv) || v != std::floor(v))
-                throw InvalidInputError("'" + path + "' has a vertex index " + std::to_string(static_cast<long long>(v)) +
-                                        " in face " + std::to_string(face + 1) + " but only " + std::to_string(nv) +
-                                        " vertices.");
+            if (!(v >= 0) || v >= double(nv) || v != std::floor(v)) {
+                std::ostringstream index;  // as written: 1e30 or inf, not what a cast makes of it
+                index << v;
+                throw InvalidInputError("'" + path + "' has a vertex index " + index.str() + " in face " +
+                                        std::to_string(face + 1) + " but only " + std::to_string(nv) + " vertices.");
+            }
             polygon[k] = std::uint32_t(v);
         }
         for (std::size_t k = 2; k < n; ++k) triangles.push_back({polygon[0], polygon[k - 1], polygon[k]});
