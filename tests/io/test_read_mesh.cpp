@@ -653,3 +653,27 @@ TEST(ReadMesh, BadFaceIndicesAreNamedAsWritten)
         }
     }
 }
+
+// A binary STL cut short, or with a damaged count, is said to be so (OpenMesh would read it
+// as text and find no vertices).
+TEST(ReadMesh, BinaryStlOfTheWrongSizeIsNamedAsSuch)
+{
+    TempDir dir;
+    std::string bytes(84 + 2 * 50, '\0');
+    bytes[80] = 2;  // two triangles
+    for (int t = 0; t < 2; ++t) {
+        const float corners[9] = {0, 0, 0, 1, 0, 0, 0, 1, float(t)};
+        std::memcpy(&bytes[std::size_t(84 + 50 * t + 12)], corners, sizeof corners);
+    }
+    writeFile(dir.file("whole.stl"), bytes);
+    EXPECT_EQ(readMesh(dir.file("whole.stl")).mesh.numTriangles(), 2u);
+    writeFile(dir.file("short.stl"), bytes.substr(0, bytes.size() - 7));
+    try {
+        readMesh(dir.file("short.stl"));
+        ADD_FAILURE() << "read";
+    } catch (const InvalidInputError& e) {
+        EXPECT_NE(std::string(e.what()).find("is a binary STL that declares 2 triangles (184 bytes) but is 177 bytes long"),
+                  std::string::npos)
+            << e.what();
+    }
+}

@@ -308,10 +308,35 @@ void checkObjVertices(const std::string& path)
     std::fclose(file);
 }
 
+/// OpenMesh takes an STL for binary when its size is 84 + 50 bytes per declared triangle,
+/// else for ASCII: a binary file cut short or with a damaged count is then read as text and
+/// said to contain no vertices. Say what is wrong with it instead, if it is not text.
+void checkBinaryStlSize(const std::string& path)
+{
+    std::FILE* file = std::fopen(path.c_str(), "rb");
+    if (!file) return;
+    unsigned char head[1024];
+    const std::size_t got = std::fread(head, 1, sizeof head, file);
+    std::fseek(file, 0, SEEK_END);
+    const long size = std::ftell(file);
+    std::fclose(file);
+    if (got < 84 || size < 84) return;
+    const std::uint64_t count = std::uint64_t(head[80]) | std::uint64_t(head[81]) << 8 | std::uint64_t(head[82]) << 16 |
+                                std::uint64_t(head[83]) << 24;
+    if (84 + 50 * count == std::uint64_t(size)) return;  // binary, and whole
+    // Text has "facet" early and no zero bytes (a binary record's small numbers have many).
+    const std::string text(reinterpret_cast<const char*>(head), got);
+    if (text.find("facet") != std::string::npos && text.find('\0') == std::string::npos) return;
+    throw InvalidInputError("'" + path + "' is a binary STL that declares " + std::to_string(count) +
+                            (count == 1 ? " triangle" : " triangles") + " (" + std::to_string(84 + 50 * count) +
+                            " bytes) but is " + std::to_string(size) + " bytes long: cut short or damaged.");
+}
+
 ReadMeshResult readWithOpenMesh(const std::string& path, const std::string& format)
 {
     checkReadable(path);
     if (format == "obj") checkObjVertices(path);
+    if (format == "stl") checkBinaryStlSize(path);
     RawImporter importer;
     bool ok = false;
     {

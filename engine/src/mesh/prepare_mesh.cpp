@@ -347,8 +347,8 @@ struct SpikeFaces {
 
 /// Leaves out of @p triangles the faces of spike vertices: vertices whose shortest edge is
 /// longer than kSpikeEdgeFactor times the diagonal of the box of the central 98 % of the
-/// vertices in faces (the 1st and 99th percentiles on each axis, at least one vertex off each
-/// end; from at most a million vertices at even steps), and longer than kSpikeNeighbourFactor times the shortest edge of each of
+/// vertices in faces (the 1st and 99th percentiles on each axis, at least five vertices off
+/// each end; from at most a million vertices at even steps), and longer than kSpikeNeighbourFactor times the shortest edge of each of
 /// their neighbours. The second test keeps coarse parts of a surface (a plane of a few
 /// long triangles beside a fine scan): their vertices' neighbours have long edges too.
 SpikeFaces leaveOutSpikeFaces(const std::vector<Vec3>& points, std::vector<Triangle>& triangles)
@@ -370,8 +370,9 @@ SpikeFaces leaveOutSpikeFaces(const std::vector<Vec3>& points, std::vector<Trian
     std::array<double, 3> lo{}, hi{};
     for (std::size_t a = 0; a < 3; ++a) {
         std::vector<double>& x = axis[a];
-        // At least one vertex off each end, so that a small mesh's one spike is outside too.
-        const std::size_t trim = std::min(std::max<std::size_t>(1, x.size() / 100), (x.size() - 1) / 2);
+        // At least five vertices off each end (a quarter of a tiny mesh's), so that a small
+        // mesh's few spikes are outside too.
+        const std::size_t trim = std::min(std::max<std::size_t>(5, x.size() / 100), (x.size() - 1) / 4);
         const std::size_t i = trim, j = x.size() - 1 - trim;
         std::nth_element(x.begin(), x.begin() + std::ptrdiff_t(i), x.end());
         lo[a] = x[i];
