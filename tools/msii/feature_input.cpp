@@ -16,7 +16,6 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
-#include <map>
 #include <cstdio>
 #include <limits>
 #include <sstream>
@@ -55,26 +54,21 @@ RasterInput readRasterInput(const std::string& path, bool needHeights)
     in.units = g.units == "metre" || g.units == "meter" || g.units == "Meter"                 ? "m"
                : g.units == "foot" || g.units == "US survey foot" || g.units == "foot_us" ? "ft"
                                                                                           : g.units;
-    for (const RasterBand& b : in.raster.bands)
-        if (b.name == "height") in.heights = b.values;
+    in.heightBand = in.raster.bands.size();
+    for (std::size_t k = 0; k < in.raster.bands.size(); ++k)
+        if (in.raster.bands[k].name == "height") in.heightBand = k;
     // The only band of a DEM is its heights; that of msii's own output (e.g. --bands quality) is not.
     const bool msiiOutput = std::any_of(in.raster.metadata.begin(), in.raster.metadata.end(),
                                         [](const auto& kv) { return kv.first == "MSII_VERSION"; });
-    if (in.heights.empty() && in.raster.bands.size() == 1 && !msiiOutput) {
-        in.heights = in.raster.bands.front().values;
+    if (in.heightBand == in.raster.bands.size() && in.raster.bands.size() == 1 && !msiiOutput) {
+        in.heightBand = 0;
         in.heightsFile = std::filesystem::absolute(path).string();
     }
+    if (in.heightBand < in.raster.bands.size()) in.heights = in.raster.bands[in.heightBand].values;
     if (!in.heights.empty()) {
         // As msii compute reads a DEM (terrain/dem.h): heights no terrain has are nodata.
         const UndeclaredNodata u = implausibleHeightsToNaN(in.heights, g.metresPerUnit);
-        if (!u.empty()) {
-            std::map<float, std::size_t> counts;
-            for (std::uint8_t k : u.valueOf)
-                if (k) ++counts[u.values[k - 1]];
-            std::vector<std::pair<float, std::size_t>> sorted(counts.begin(), counts.end());
-            std::stable_sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
-            in.warnings.push_back(describeUndeclaredNodata(sorted));
-        }
+        if (!u.empty()) in.warnings.push_back(describeUndeclaredNodata(u.cellsPerValue()));
     }
     if (in.heights.empty() && needHeights)  // msii compute's GeoTIFFs name their DEM
         for (const auto& [key, named] : in.raster.metadata) {
@@ -97,12 +91,7 @@ RasterInput readRasterInput(const std::string& path, bool needHeights)
                 continue;
             Dem dem = source.read(c, r, g.width, g.height);
             in.heights = std::move(dem.heights);
-            if (!dem.undeclared.empty()) {
-                std::map<float, std::size_t> counts;
-                for (std::uint8_t k : dem.undeclared.valueOf)
-                    if (k) ++counts[dem.undeclared.values[k - 1]];
-                in.warnings.push_back(describeUndeclaredNodata({counts.begin(), counts.end()}));
-            }
+            if (!dem.undeclared.empty()) in.warnings.push_back(describeUndeclaredNodata(dem.undeclared.cellsPerValue()));
             in.heightsFile = std::filesystem::absolute(file).lexically_normal().string();
         }
     return in;
@@ -119,11 +108,7 @@ FeatureMesh featureMeshFromRaster(const std::string& path)
                                 " has no heights: no band 'height', and its DEM (MSII_INPUT) is not where it was "
                                 "(msii compute --bands ...,height writes them)");
     // The bands other than the heights become vertex properties.
-    std::size_t heightBand = raster.bands.size();
-    for (std::size_t k = 0; k < raster.bands.size(); ++k)
-        if (raster.bands[k].name == "height" || (raster.bands.size() == 1 && !in.heightsFile.empty() &&
-                                                  fs::equivalent(in.heightsFile, path)))
-            heightBand = k;
+    const std::size_t heightBand = in.heightBand;
     std::string radii;
     for (const auto& [key, value] : raster.metadata)
         if (key == "MSII_RADII") radii = value;

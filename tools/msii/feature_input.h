@@ -40,6 +40,7 @@ struct RasterInput {
     RasterImage raster;
     std::vector<float> heights;
     std::string units;        ///< the coordinate system's unit, "m" for metres
+    std::size_t heightBand = 0;  ///< the band holding the heights; bands.size() if none does (they come from MSII_INPUT)
     std::string heightsFile;  ///< the DEM file the heights come from; empty if a band named "height"
     std::vector<std::string> warnings;  ///< e.g. implausible heights taken as nodata
 };

@@ -285,8 +285,23 @@ UndeclaredNodata implausibleHeightsToNaN(std::vector<float>& heights, double met
     return found;
 }
 
-std::string describeUndeclaredNodata(const std::vector<std::pair<float, std::size_t>>& counts)
+std::map<float, std::size_t> UndeclaredNodata::cellsPerValue() const
 {
+    std::map<float, std::size_t> out;
+    for (std::size_t c = 0; c < valueOf.size(); ++c) count(c, out);
+    return out;
+}
+
+std::vector<std::pair<float, std::size_t>> mostCellsFirst(const std::map<float, std::size_t>& cellsPerValue)
+{
+    std::vector<std::pair<float, std::size_t>> out(cellsPerValue.begin(), cellsPerValue.end());
+    std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+    return out;
+}
+
+std::string describeUndeclaredNodata(const std::map<float, std::size_t>& cellsPerValue)
+{
+    const std::vector<std::pair<float, std::size_t>> counts = mostCellsFirst(cellsPerValue);
     std::ostringstream out;
     out << std::setprecision(9);  // a float's every digit: the value to declare as nodata
     std::size_t shown = 0;

@@ -483,11 +483,11 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
                 throw InvalidInputError(fileName(input) +
                                         ": no 2 x 2 block of cells has heights, so there is no surface to compute on");
             stage.restart();
-            const UndeclaredNodata& u = win.dem.undeclared;
             for (int y = win.row; y < win.row + win.rows; ++y)
                 for (int x = win.col; x < win.col + win.cols; ++x) {
-                    ownCellsWithHeight += !std::isnan(win.dem.heights[win.boxCell(x, y)]);
-                    if (!u.empty() && u.valueOf[win.boxCell(x, y)] != 0) ++undeclared[u.values[u.valueOf[win.boxCell(x, y)] - 1]];
+                    const std::size_t c = win.boxCell(x, y);
+                    ownCellsWithHeight += !std::isnan(win.dem.heights[c]);
+                    win.dem.undeclared.count(c, undeclared);
                 }
             writeOwnCells(win, w.region, cells, writer);
             result.writeSeconds += stage.seconds();
@@ -499,10 +499,8 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
     result.input.numValid = ownCellsWithHeight;
     result.diagnostics = diagnostics.list();
     if (!undeclared.empty()) {
-        std::vector<std::pair<float, std::size_t>> counts(undeclared.begin(), undeclared.end());
-        std::stable_sort(counts.begin(), counts.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
-        Diagnostic d{"undeclared_nodata", 0, {}, describeUndeclaredNodata(counts)};
-        for (const auto& [value, cells] : counts) {
+        Diagnostic d{"undeclared_nodata", 0, {}, describeUndeclaredNodata(undeclared)};
+        for (const auto& [value, cells] : mostCellsFirst(undeclared)) {
             d.count += cells;
             if (d.figures.size() < 4) d.figures.emplace_back("value_" + std::to_string(d.figures.size() + 1), value);
         }

@@ -10,6 +10,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -47,15 +48,25 @@ struct UndeclaredNodata {
     std::vector<float> values;          ///< the distinct heights found (at most 255)
     std::vector<std::uint8_t> valueOf;  ///< per cell: 0, or 1 + the index of its value
     bool empty() const { return values.empty(); }
+    /// Adds cell @p c's height to @p cellsPerValue if it was one of them.
+    void count(std::size_t c, std::map<float, std::size_t>& cellsPerValue) const
+    {
+        if (!valueOf.empty() && valueOf[c] != 0) ++cellsPerValue[values[valueOf[c] - 1u]];
+    }
+    /// The cells of each height, over all cells.
+    std::map<float, std::size_t> cellsPerValue() const;
 };
 
 /// Replaces implausible heights in @p heights by NaN; which were replaced.
 UndeclaredNodata implausibleHeightsToNaN(std::vector<float>& heights, double metresPerUnit);
 
-/// One sentence on @p counts (height → cells): "100 cells hold -9999 and 12 hold -3.40282e+38,
-/// heights no terrain has, and the raster declares no nodata value for them: they were taken as
-/// nodata".
-std::string describeUndeclaredNodata(const std::vector<std::pair<float, std::size_t>>& counts);
+/// @p cellsPerValue (height → cells) with the most cells first.
+std::vector<std::pair<float, std::size_t>> mostCellsFirst(const std::map<float, std::size_t>& cellsPerValue);
+
+/// One sentence on @p cellsPerValue (height → cells), the most cells first: "100 cells hold
+/// -9999 and 12 hold -3.40282347e+38, heights no terrain has, and the raster declares no
+/// nodata value for them: taken as nodata".
+std::string describeUndeclaredNodata(const std::map<float, std::size_t>& cellsPerValue);
 
 struct Dem {
     RasterGeoreference georeference;
