@@ -186,6 +186,55 @@ TEST(PatchLine, FlatPlaneIsOne)
     EXPECT_LE(e.meanL, 3e-4);
 }
 
+// A plane of slivers: strips 5 long and 0.02 wide, 100 times longer than the sample cells,
+// flat and tilted so that they cross the cells obliquely. Such triangles are cut along the
+// cells rather than into (5 / h0)² congruent pieces (docs/limits.md, Memory rule); P̂ and L̂
+// are 1 as on any plane, within the plane's bounds.
+TEST(PatchLine, PlaneOfSliversIsOne)
+{
+    for (const bool tilted : {false, true}) {
+        TriMesh mesh;
+        const int rows = 501;  // y = 0, 0.02, ..., 10
+        for (int j = 0; j < rows; ++j)
+            for (int i = 0; i < 3; ++i) mesh.points.push_back({5.0 * i, 0.02 * j, 0.0});
+        for (int j = 0; j + 1 < rows; ++j)
+            for (std::uint32_t i = 0; i < 2; ++i) {
+                const std::uint32_t a = std::uint32_t(j) * 3 + i, b = a + 1, c = a + 3, d = a + 4;
+                mesh.triangles.push_back({a, b, d});
+                mesh.triangles.push_back({a, d, c});
+            }
+        if (tilted)
+            for (Vec3& p : mesh.points) {  // 30° about x, then 20° about z
+                const double c1 = std::cos(0.5236), s1 = std::sin(0.5236), c2 = std::cos(0.3491), s2 = std::sin(0.3491);
+                const Vec3 q{p.x, c1 * p.y - s1 * p.z, s1 * p.y + c1 * p.z};
+                p = {c2 * q.x - s2 * q.y, s2 * q.x + c2 * q.y, q.z};
+            }
+        InvariantsOptions o = patchLineOnly(2.0);
+        o.voxelSize = 0.05;
+        const InvariantsResult res = computeInvariants(mesh, o);
+        // The per-radius table is printed; asserted from r = 5 h0 on (the median edge, 5, is
+        // no measure of these triangles). Unmasked: the middle column's vertices away from
+        // the ends.
+        compare(res, [](double) { return 1.0; }, [](double) { return 1.0; },
+                tilted ? "tilted plane of slivers" : "plane of slivers");
+        double maxP = 0, maxL = 0;
+        std::size_t checked = 0;
+        for (std::size_t j = 0; j < res.plan.radii.size(); ++j) {
+            if (res.plan.radii[j] < 5 * o.voxelSize) continue;
+            for (std::size_t i = 0; i < mesh.numVertices(); ++i) {
+                const float p = res.features[Invariant::Patch][j][i], l = res.features[Invariant::Line][j][i];
+                if (std::isnan(p)) continue;
+                maxP = std::max(maxP, std::abs(p - 1.0));
+                maxL = std::max(maxL, std::abs(l - 1.0));
+                ++checked;
+            }
+        }
+        EXPECT_GE(checked, 14u * 150u);
+        EXPECT_LE(maxP, 1e-3);
+        EXPECT_LE(maxL, 1e-3);
+    }
+}
+
 TEST(PatchLine, SphereAndCavityMatchClosedForms)
 {
     for (const bool cavity : {false, true}) {

@@ -2,14 +2,19 @@
 // patches, computed in one window and in windows with halos, has the values of the
 // pipeline (pipeline/compute.h) run on the DEM's whole mesh, bit for bit, cell by cell; a
 // band that the options cannot give is refused before any computation, naming those that
-// can; masked values are counted over the own cells.
+// can; masked values are counted over the own cells. A window whose spikes make its surface
+// exceed the memory limit is computed in smaller windows, with the values of one piece; one
+// that stays too large when split is refused before anything is computed.
 #include <msii/core/errors.h>
+#include <msii/invariants/invariants.h>
 #include <msii/io/feature_properties.h>
+#include <msii/mesh/mesh_stats.h>
 #include <msii/pipeline/compute.h>
 #include <msii/samples/generators.h>
 #include <msii/terrain/dem.h>
 #include <msii/terrain/dem_compute.h>
 #include <msii/terrain/raster_output.h>
+#include <msii/tiling/tiled_compute.h>
 
 #include <gtest/gtest.h>
 
@@ -44,6 +49,29 @@ std::string demFile(const test::TempDir& dir)
     RasterOutputOptions ro;
     ro.nodata = -9999.0;
     writeRaster(path, dem.georeference, {{"height", dem.heights}}, ro);
+    return path;
+}
+
+/// A 120 × 120 m terrain in 1 m cells with @p spikes cells raised 5 km, or (@p spikes < 0) a fifth of all cells raised by up to 5 km.
+std::string spikyDemFile(const test::TempDir& dir, int spikes)
+{
+    samples::DemSampleOptions d;
+    d.surface.kind = samples::HeightFieldKind::Terrain;
+    d.surface.width = 120;
+    d.surface.height = 120;
+    d.surface.spacing = 1.0;
+    d.surface.relief = 3;
+    d.surface.seed = 11;
+    Dem dem = samples::makeDem(d);
+    std::uint32_t state = 12345;
+    const auto next = [&] { return state = state * 1664525u + 1013904223u; };
+    if (spikes < 0)
+        for (float& z : dem.heights)
+            if (next() % 5u == 0) z += float(next() % 5000u);
+    for (int k = 0; k < spikes; ++k)
+        dem.heights[next() % dem.heights.size()] += 5000.0f;
+    const std::string path = dir.file(spikes < 0 ? "noise.tif" : "spikes.tif");
+    writeRaster(path, dem.georeference, {{"height", dem.heights}}, RasterOutputOptions());
     return path;
 }
 
@@ -120,4 +148,57 @@ TEST(DemCompute, BandsThatCannotBeGivenAreRefusedFirst)
     o.bands = {"quality"};
     o.compute.tiling.tilesPerAxis = 2;
     EXPECT_THROW(computeDem(input, dir.file("out.tif"), o), InvalidInputError);
+}
+
+TEST(DemCompute, SpikyWindowsAreSplitAndKeepTheValuesOfOnePiece)
+{
+    const test::TempDir dir;
+    const std::string input = spikyDemFile(dir, 20);
+    DemComputeOptions o;
+    o.compute.invariants.radius = 3;
+    o.compute.invariants.scales = 4;
+    o.compute.invariants.select({Invariant::Volume});
+    o.bands = {"V_01", "V_04", "quality", "filled_share"};
+    const DemComputeResult one = computeDem(input, dir.file("one.tif"), o);
+    ASSERT_EQ(one.windowsPerRow * one.windowsPerColumn, 1);
+    EXPECT_EQ(one.splitWindows, 0);
+    // A budget of half the whole surface's estimate: the raster fits one window by its cells
+    // (1.2 kB each for V), not by its surface; it is split until each part's spikes fit.
+    const double whole = surfaceBytesEstimate(computeMeshStats(demToMesh(readDem(input)).mesh).area, one.plan.voxelSize,
+                                              o.compute.invariants);
+    o.compute.tiling.memoryBudget = 0.5 * whole;
+    ASSERT_GT(o.compute.tiling.memoryBudget, 120.0 * 120.0 * computationBytesPerVertex(o.compute.invariants));
+    const DemComputeResult split = computeDem(input, dir.file("split.tif"), o);
+    EXPECT_GT(split.splitWindows, 1);
+    EXPECT_EQ(split.plan.voxelSize, one.plan.voxelSize);
+    const RasterImage a = readRaster(dir.file("one.tif")), b = readRaster(dir.file("split.tif"));
+    ASSERT_EQ(a.bands.size(), o.bands.size());
+    ASSERT_EQ(b.bands.size(), o.bands.size());
+    std::size_t compared = 0, differing = 0;
+    for (std::size_t k = 0; k < o.bands.size(); ++k)
+        for (std::size_t c = 0; c < a.bands[k].values.size(); ++c) {
+            differing += !sameBits(a.bands[k].values[c], b.bands[k].values[c]);
+            compared += !std::isnan(a.bands[k].values[c]);
+        }
+    EXPECT_EQ(differing, 0u);
+    EXPECT_GT(compared, 4u * 14000u);
+}
+
+TEST(DemCompute, SpikesTooDenseForTheBudgetWhenSplitAreRefusedAtOnce)
+{
+    const test::TempDir dir;
+    const std::string input = spikyDemFile(dir, -1);
+    DemComputeOptions o;
+    o.compute.invariants.radius = 3;
+    o.compute.invariants.scales = 4;
+    o.compute.tiling.memoryBudget = 50e6;
+    try {
+        computeDem(input, dir.file("out.tif"), o);
+        FAIL() << "a surface of spikes 5 km high was computed in 50 MB";
+    } catch (const MemoryLimitError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("the surface would take about"), std::string::npos) << what;
+        EXPECT_NE(what.find("the smallest the raster is split into"), std::string::npos) << what;
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir.file("out.tif")));
 }

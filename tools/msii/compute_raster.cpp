@@ -121,7 +121,8 @@ OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, c
                    {"windows", {{"per_row", result.windowsPerRow}, {"per_column", result.windowsPerColumn},
                                 {"cells", result.windowCells}, {"halo_cells", result.haloCells},
                                 {"narrow_halo_cells", result.narrowHaloCells},
-                                {"windows_with_wide_halo", result.wideHaloWindows}}}};
+                                {"windows_with_wide_halo", result.wideHaloWindows},
+                                {"windows_split_for_surface", result.splitWindows}}}};
     if (options.region.cols > 0)
         j["raster"]["tile_of_mosaic"] = {{"tile", args.tileOfMosaic},
                                          {"col", options.region.col},
@@ -139,10 +140,15 @@ OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, c
                             {"interpolation", t.interpolation}, {"samples", t.samples}, {"patch_line", t.patchLine},
                             {"write", result.writeSeconds}, {"total", total.seconds()}};
     writeTextFileAtomic(sidecar, j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
-    if (!args.quiet)
-        std::fprintf(stderr, "msii: %s -> %s (%d x %d cells, %zu with heights, %zu bands, %d windows, %.1f s)\n",
+    if (!args.quiet) {
+        const int windows = result.windowsPerRow * result.windowsPerColumn;
+        const std::string split = result.splitWindows > 0 ? ", " + std::to_string(result.splitWindows) +
+                                                                " split further for their spikes' surface"
+                                                          : "";
+        std::fprintf(stderr, "msii: %s -> %s (%d x %d cells, %zu with heights, %zu bands, %d window%s%s, %.1f s)\n",
                      input.c_str(), output.c_str(), grid.width, grid.height, result.input.numValid, result.bands.size(),
-                     result.windowsPerRow * result.windowsPerColumn, total.seconds());
+                     windows, windows == 1 ? "" : "s", split.c_str(), total.seconds());
+    }
     return {result.input.numValid, result.plan.voxelSize, total.seconds()};
 }
 

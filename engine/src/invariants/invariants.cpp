@@ -68,9 +68,10 @@ InvariantsResult checkComputation(const TriMesh& mesh, const InvariantsOptions& 
 
 } // namespace
 
-double surfaceBytesEstimate(double area, double voxelSize)
+double surfaceBytesEstimate(double area, double voxelSize, const InvariantsOptions& options)
 {
-    return kBytesPerSurfaceVoxel * area / (voxelSize * voxelSize);
+    const double perCell = options.computePatch || options.computeLine ? kBytesPerSurfaceSample : kBytesPerSurfaceVoxel;
+    return perCell * area / (voxelSize * voxelSize);
 }
 
 namespace {
@@ -84,9 +85,10 @@ std::string gigabytes(double bytes)
 }
 
 /// Refuses, before anything is allocated, a surface whose level set alone would not fit.
-void checkSurfaceMemory(const MeshStats& stats, double voxelSize, double limit)
+void checkSurfaceMemory(const MeshStats& stats, double voxelSize, const InvariantsOptions& options)
 {
-    const double estimate = surfaceBytesEstimate(stats.area, voxelSize);
+    const double limit = options.exact ? 0 : options.memoryLimit;
+    const double estimate = surfaceBytesEstimate(stats.area, voxelSize, options);
     if (!(limit > 0) || estimate <= limit) return;
     std::ostringstream msg;
     msg.precision(3);
@@ -94,7 +96,7 @@ void checkSurfaceMemory(const MeshStats& stats, double voxelSize, double limit)
         << voxelSize << ": " << stats.area / (voxelSize * voxelSize) << " voxels of surface), more than the "
         << gigabytes(limit) << " the computation may use; a surface this much larger than its extent ("
         << stats.diagonal << " across) comes from spikes or noise in its coordinates or heights";
-    throw InvalidInputError(msg.str());
+    throw MemoryLimitError(msg.str());
 }
 
 } // namespace
@@ -104,7 +106,7 @@ InvariantsResult planInvariants(const TriMesh& mesh, const InvariantsOptions& op
     InvariantsResult result = checkComputation(mesh, options);
     if (options.plan) {  // a piece of a surface planned whole
         result.plan = *options.plan;
-        checkSurfaceMemory(result.stats, result.plan.voxelSize, options.exact ? 0 : options.memoryLimit);
+        checkSurfaceMemory(result.stats, result.plan.voxelSize, options);
         return result;
     }
     const std::vector<double> radii = equidistantRadii(options.radius, options.scales);
@@ -118,6 +120,7 @@ InvariantsResult planInvariants(const TriMesh& mesh, const InvariantsOptions& op
     const double h0 = options.voxelSize > 0
                           ? options.voxelSize
                           : chooseVoxelSize(result.stats.medianEdge, radii, options.minVoxelsPerRadius);
+    checkSurfaceMemory(result.stats, h0, options);
     // A grid beyond ~2e9 surface voxels would not fit in memory: say so instead of trying.
     const double surfaceVoxels = result.stats.area / (h0 * h0);
     if (surfaceVoxels > 2e9) {
@@ -125,7 +128,6 @@ InvariantsResult planInvariants(const TriMesh& mesh, const InvariantsOptions& op
         msg << "the voxel size " << h0 << " is far too small for a surface of area " << result.stats.area;
         throw InvalidInputError(msg.str());
     }
-    checkSurfaceMemory(result.stats, h0, options.exact ? 0 : options.memoryLimit);
     result.plan = makeScalePlan(radii, h0, options.minVoxelsPerRadius, patchLinePrecision(options));
     result.plan.origin = localOrigin((result.stats.bboxMin + result.stats.bboxMax) * 0.5, h0);
     result.plan.vertexSpacing = result.stats.medianEdge;

@@ -6,7 +6,9 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -20,27 +22,167 @@ std::size_t totalSize(const SampleParts& parts)
     return total;
 }
 
+namespace {
+
+/// Adds a sliver's part of area @p a, centroid @p centroid, normal @p nrm and second moment
+/// @p about its centroid to @p s: ∫ (x − o)(x − o)ᵀ dA = about + a v vᵀ, v = centroid − o.
+void add(SampleSums& s, double a, const Vec3& centroid, const Vec3& nrm, const std::array<double, 6>& about)
+{
+    const Vec3 offset = centroid - s.origin;
+    const auto oo = outer(offset, offset);
+    const auto nn = outer(nrm, nrm);
+    s.area += a;
+    s.moment += centroid * a;
+    for (std::size_t q = 0; q < 6; ++q) {
+        s.normalTensor[q] += a * nn[q];
+        s.secondMoment[q] += about[q] + a * oo[q];
+    }
+}
+
+double coordinate(const Vec3& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
+
+/// A convex polygon: a triangle clipped by the six planes of a cell has at most 9 corners.
+struct Polygon {
+    std::array<Vec3, 12> corner;
+    int n = 0;
+};
+
+/// The part of @p in with coordinate @p axis at least @p bound (@p above) or at most it
+/// (Sutherland–Hodgman: one plane adds at most one corner).
+Polygon clipped(const Polygon& in, int axis, double bound, bool above)
+{
+    Polygon out;
+    for (int i = 0; i < in.n; ++i) {
+        const Vec3& a = in.corner[std::size_t(i)];
+        const Vec3& b = in.corner[std::size_t((i + 1) % in.n)];
+        const double da = above ? coordinate(a, axis) - bound : bound - coordinate(a, axis);
+        const double db = above ? coordinate(b, axis) - bound : bound - coordinate(b, axis);
+        if (da >= 0) out.corner[std::size_t(out.n++)] = a;
+        if ((da >= 0) != (db >= 0)) out.corner[std::size_t(out.n++)] = a + (b - a) * (da / (da - db));
+    }
+    return out;
+}
+
+/// The part of a sliver in one cell: its area, centroid and ∫ (x − c)(x − c)ᵀ dA about the
+/// centroid c (xx, yy, zz, xy, xz, yz).
+struct CellPiece {
+    std::uint64_t key;
+    double area = 0;
+    Vec3 centroid;
+    std::array<double, 6> secondMoment{};
+};
+
+/// The area, centroid and second moment of the convex polygon @p poly, from its fan of
+/// triangles (each: a (c cᵀ + Σ_k e_k e_kᵀ / 12) about the origin, e_k = corner k − c).
+CellPiece polygonPiece(const Polygon& poly)
+{
+    CellPiece piece;
+    std::array<double, 6> about0{};  // about corner 0, which keeps the digits
+    for (int i = 1; i + 1 < poly.n; ++i) {
+        const std::array<Vec3, 3> t{Vec3(), poly.corner[std::size_t(i)] - poly.corner[0],
+                                    poly.corner[std::size_t(i + 1)] - poly.corner[0]};
+        const double a = 0.5 * norm(cross(t[1], t[2]));
+        const Vec3 c = (t[1] + t[2]) / 3.0;
+        std::array<double, 6> second = outer(c, c);
+        for (const Vec3& corner : t) {
+            const auto ee = outer(corner - c, corner - c);
+            for (std::size_t q = 0; q < 6; ++q) second[q] += ee[q] / 12.0;
+        }
+        for (std::size_t q = 0; q < 6; ++q) about0[q] += a * second[q];
+        piece.area += a;
+        piece.centroid += c * a;
+    }
+    if (!(piece.area > 0)) return piece;
+    const Vec3 c = piece.centroid / piece.area;  // relative to corner 0
+    const auto cc = outer(c, c);
+    for (std::size_t q = 0; q < 6; ++q) piece.secondMoment[q] = about0[q] - piece.area * cc[q];
+    piece.centroid = poly.corner[0] + c;
+    return piece;
+}
+
+/// The parts of polygon @p poly in the cells of @p h0, cut along axis @p axis and those
+/// after it (the cell's coordinates on the axes before it in @p cell), appended to @p out;
+/// parts without area are left out.
+void cutAlongCells(const Polygon& poly, int axis, std::array<std::int64_t, 3>& cell, double h0,
+                   std::vector<CellPiece>& out)
+{
+    if (axis == 3) {
+        CellPiece piece = polygonPiece(poly);
+        piece.key = morton(std::uint64_t(cell[0]), std::uint64_t(cell[1]), std::uint64_t(cell[2]));
+        if (piece.area > 0) out.push_back(piece);
+        return;
+    }
+    double lo = coordinate(poly.corner[0], axis), hi = lo;
+    for (int i = 1; i < poly.n; ++i)
+        lo = std::min(lo, coordinate(poly.corner[std::size_t(i)], axis)), hi = std::max(hi, coordinate(poly.corner[std::size_t(i)], axis));
+    const std::int64_t first = std::int64_t(std::floor(lo / h0)), last = std::int64_t(std::floor(hi / h0));
+    for (std::int64_t k = first; k <= last; ++k) {
+        const Polygon part = first == last ? poly : clipped(clipped(poly, axis, double(k) * h0, true), axis, double(k + 1) * h0, false);
+        if (part.n < 3) continue;
+        cell[std::size_t(axis)] = k + kOffset;
+        cutAlongCells(part, axis + 1, cell, h0, out);
+    }
+}
+
+/// Pieces per side of the m² congruent pieces of @p t, or 0 for a sliver (or a triangle too
+/// large for the sub's 15 bits), which is cut along the cells instead: cut into m² pieces, a
+/// needle of a DEM's spike (5 km long, 1 m wide) would give (5 km / h0)² pieces where the
+/// ~2 · 5 km / h0 cells it crosses are enough (docs/limits.md, Memory rule).
+int piecesPerSideOrSliver(const std::array<Vec3, 3>& t, double h0)
+{
+    const int m = piecesPerSide(t, h0);
+    const double area = 0.5 * norm(cross(t[1] - t[0], t[2] - t[0]));
+    const double perimeter = norm(t[1] - t[0]) + norm(t[2] - t[1]) + norm(t[0] - t[2]);
+    const double pieces = double(m) * m, cells = area / (h0 * h0) + perimeter / h0;
+    return m > 0x7fff || (pieces > 64 && pieces > 16 * cells) ? 0 : m;
+}
+
+} // namespace
+
 SampleParts finestSamples(const TriMesh& mesh, double h0, int coarsestLevel)
 {
     const std::size_t nt = mesh.numTriangles();
     std::vector<std::uint64_t> first(nt + 1, 0);
     std::vector<int> sides(nt);
+    const auto corners = [&](std::size_t t) {
+        const auto& tri = mesh.triangles[t];
+        return std::array<Vec3, 3>{mesh.points[tri[0]], mesh.points[tri[1]], mesh.points[tri[2]]};
+    };
+    // Slivers are cut along the cells here, each into its own list (in parallel), then joined
+    // in the triangles' order so that the pieces do not depend on the threads.
+    std::vector<std::vector<CellPiece>> sliverPieces(nt);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt), [&](const auto& r) {
         for (std::size_t t = r.begin(); t < r.end(); ++t) {
-            const auto& tri = mesh.triangles[t];
-            sides[t] = piecesPerSide({mesh.points[tri[0]], mesh.points[tri[1]], mesh.points[tri[2]]}, h0);
-            if (sides[t] > 0x7fff) throw InvalidInputError("a triangle is too large for the sample cells");
+            const std::array<Vec3, 3> v = corners(t);
+            sides[t] = piecesPerSideOrSliver(v, h0);
+            if (sides[t] > 0) {
+                first[t + 1] = std::uint64_t(sides[t]) * std::uint64_t(sides[t]);
+                continue;
+            }
+            Polygon poly;
+            poly.corner = {v[0], v[1], v[2]};
+            poly.n = 3;
+            std::array<std::int64_t, 3> cell{};
+            cutAlongCells(poly, 0, cell, h0, sliverPieces[t]);
+            first[t + 1] = sliverPieces[t].size();
         }
     });
-    for (std::size_t t = 0; t < nt; ++t) first[t + 1] = first[t] + std::uint64_t(sides[t]) * sides[t];
+    for (std::size_t t = 0; t < nt; ++t) {
+        if (sliverPieces[t].size() > 0xffffffffu) throw InvalidInputError("a triangle is too large for the sample cells");
+        first[t + 1] += first[t];
+    }
 
     std::vector<Piece> pieces(first[nt]);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt), [&](const auto& r) {
         for (std::size_t t = r.begin(); t < r.end(); ++t) {
-            const auto& tri = mesh.triangles[t];
-            const std::array<Vec3, 3> v{mesh.points[tri[0]], mesh.points[tri[1]], mesh.points[tri[2]]};
             const int m = sides[t];
             std::uint64_t k = first[t];
+            if (m == 0) {
+                std::uint32_t c = 0;
+                for (const CellPiece& piece : sliverPieces[t]) pieces[k++] = {piece.key, std::uint32_t(t), c++};
+                continue;
+            }
+            const std::array<Vec3, 3> v = corners(t);
             for (int i = 0; i < m; ++i)
                 for (int j = 0; i + j < m; ++j)
                     for (int down = 0; down < 2; ++down) {
@@ -67,9 +209,16 @@ SampleParts finestSamples(const TriMesh& mesh, double h0, int coarsestLevel)
         auto& out = parts[c];
         for (std::size_t i = chunks[c]; i < chunks[c + 1]; ++i) {
             const Piece& p = pieces[i];
-            const auto& tri = mesh.triangles[p.triangle];
-            const std::array<Vec3, 3> v{mesh.points[tri[0]], mesh.points[tri[1]], mesh.points[tri[2]]};
             const int m = sides[p.triangle];
+            if (m == 0) {  // a sliver's part in the cell: its sums, with the triangle's normal
+                const CellPiece& piece = sliverPieces[p.triangle][p.sub];
+                const std::array<Vec3, 3> v = corners(p.triangle);
+                const Vec3 nrm = normalized(cross(v[1] - v[0], v[2] - v[0]));
+                if (out.empty() || out.back().key != p.key) out.push_back(SampleSums{p.key, 0, {}, {}, {}, piece.centroid});
+                add(out.back(), piece.area, piece.centroid, nrm, piece.secondMoment);
+                continue;
+            }
+            const std::array<Vec3, 3> v = corners(p.triangle);
             const auto c3 = pieceCorners(v, m, p.sub);
             const Vec3 normalArea = cross(v[1] - v[0], v[2] - v[0]) * (0.5 / (double(m) * m));
             const double a = norm(normalArea);

@@ -100,11 +100,13 @@ struct Level {
     std::unordered_map<std::uint64_t, std::pair<std::uint32_t, std::uint32_t>> blocks;
 };
 
-/// One piece of a triangle cut into m² congruent sub-triangles: row i, column j, up or down.
+/// One piece of a triangle: of the m² congruent sub-triangles it is cut into (sub = row
+/// i << 16 | column j << 1 | up or down), or for a sliver, which is cut along the cells
+/// instead, the index of the piece's corners (finestSamples).
 struct Piece {
     std::uint64_t key;
     std::uint32_t triangle;
-    std::uint32_t sub;  // i << 16 | j << 1 | down
+    std::uint32_t sub;
 };
 
 inline std::array<Vec3, 3> pieceCorners(const std::array<Vec3, 3>& t, int m, std::uint32_t sub)

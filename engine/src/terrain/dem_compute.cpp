@@ -163,7 +163,9 @@ ScalePlan sharedPlan(const DemSource& source, const std::string& input, const Co
     po.leaveOutSpikes = false;  // as the windows (below)
     po.radius = options.invariants.radius;
     po.maxHolePerimeter = options.maxHolePerimeter;
-    const InvariantsResult planned = planInvariants(prepareMesh(pm.mesh, po).mesh, options.invariants);
+    InvariantsOptions planning = options.invariants;
+    planning.memoryLimit = 0;  // the plan only: each window's surface is checked as it is computed
+    const InvariantsResult planned = planInvariants(prepareMesh(pm.mesh, po).mesh, planning);
     diagnostics = planned.diagnostics;
     ScalePlan plan = planned.plan;
     if (whole) return plan;  // as compute() plans the one piece
@@ -174,9 +176,10 @@ ScalePlan sharedPlan(const DemSource& source, const std::string& input, const Co
 
 /// The windows for @p options: one if the raster fits the budget (or --window-cells), else
 /// as many as fit, with the shared plan and halos that reach past everything a window's own
-/// cells depend on.
+/// cells depend on. With @p split, windows with halos even for a raster that fits one (its
+/// surface exceeded the memory limit), with the plan of the raster in one piece.
 WindowLayout layWindows(const DemSource& source, const std::string& input, const DemComputeOptions& options,
-                        DemComputeResult& result)
+                        DemComputeResult& result, bool split = false)
 {
     const InvariantsOptions& asked = options.compute.invariants;
     const RasterGeoreference& grid = source.info().georeference;
@@ -205,9 +208,10 @@ WindowLayout layWindows(const DemSource& source, const std::string& input, const
         w.region = g;
     }
     const bool part = options.region.cols > 0;
-    if (w.oneWindow && !part) return w;  // planned on its own mesh, as the mesh path would
-    // A part of a raster that fits one window computes with the plan of that one piece,
-    // in windows with halos like a larger raster's, so that it equals the one piece.
+    if (w.oneWindow && !part && !split) return w;  // planned on its own mesh, as the mesh path would
+    // A part of a raster that fits one window (or a raster that fits one by its cells but not
+    // by its surface) computes with the plan of that one piece, in windows with halos like a
+    // larger raster's, so that it equals the one piece.
     w.options.invariants.plan = sharedPlan(source, input, w.options, result.diagnostics, w.oneWindow);
     w.oneWindow = false;
     const ScalePlan& plan = *w.options.invariants.plan;
@@ -228,6 +232,11 @@ WindowLayout layWindows(const DemSource& source, const std::string& input, const
                                 std::to_string(w.wideHalo) + " cells wide)");
     return w;
 }
+
+/// Cells [col, col + cols) × [row, row + rows) of the raster.
+struct CellRect {
+    int col = 0, row = 0, cols = 0, rows = 0;
+};
 
 /// A window's own cells [col, col + cols) × [row, row + rows) and the box read around them.
 struct Window {
@@ -272,19 +281,17 @@ bool hasOpenGap(const std::vector<float>& heights, int bw, int bh, double cell, 
     return false;
 }
 
-/// Reads window (wx, wy) with the narrow halo, or the wide one if a nodata gap crosses the
+/// Reads the window of own cells @p own with the narrow halo, or the wide one if a nodata gap crosses the
 /// narrow one's edge: such a gap would be filled in the whole DEM but is a border in the
 /// window. A gap that crosses has a cell on the narrow window's outermost rows or columns
 /// (those on the DEM's edge excepted: there the whole DEM has the same border). When
 /// borders are continued, a border in the narrow box (the DEM's edge, a gap too large to
 /// fill) takes the wide one: the continuation the own cells see depends on the raster that
 /// far (continuationReach).
-Window readWindow(const DemSource& source, const WindowLayout& w, int wx, int wy)
+Window readWindow(const DemSource& source, const WindowLayout& w, const CellRect& own)
 {
     Window win;
-    win.col = w.region.col + wx * w.side, win.row = w.region.row + wy * w.side;
-    win.cols = std::min(w.side, w.region.col + w.region.cols - win.col);
-    win.rows = std::min(w.side, w.region.row + w.region.rows - win.row);
+    win.col = own.col, win.row = own.row, win.cols = own.cols, win.rows = own.rows;
     const auto boxOf = [&](int halo) {
         return std::array<int, 4>{std::max(0, win.col - halo), std::max(0, win.row - halo),
                                   std::min(w.width, win.col + win.cols + halo), std::min(w.height, win.row + win.rows + halo)};
@@ -407,6 +414,116 @@ void writeOwnCells(const Window& win, const RasterRegion& region, const std::vec
     }
 }
 
+/// The own cells of @p own in two halves along each side longer than a cell.
+std::vector<CellRect> quarters(const CellRect& own)
+{
+    std::vector<CellRect> parts;
+    const int c1 = (own.cols + 1) / 2, r1 = (own.rows + 1) / 2;
+    for (const auto& [row, rows] : {std::pair{own.row, r1}, std::pair{own.row + r1, own.rows - r1}})
+        for (const auto& [col, cols] : {std::pair{own.col, c1}, std::pair{own.col + c1, own.cols - c1}})
+            if (rows > 0 && cols > 0) parts.push_back({col, row, cols, rows});
+    return parts;
+}
+
+/// What is counted over the own cells of all windows.
+struct WindowTotals {
+    DiagnosticSum diagnostics;
+    std::size_t ownCellsWithHeight = 0;
+    std::map<float, std::size_t> undeclared;  ///< implausible heights taken as nodata
+};
+
+/// Computes windows and writes their own cells, and counts over them. A window whose surface
+/// would take more than the memory limit (spikes or noise in the heights make a surface far
+/// larger than its cells) is computed in quarters instead, down to windows no wider than
+/// their halo, where quartering would hardly shrink what is read (docs/limits.md, Memory
+/// rule). Every window has the shared plan and halos that hold what its own cells depend
+/// on, so the values do not depend on the windows' sizes.
+class WindowRun {
+public:
+    WindowRun(const DemSource& source, const std::string& input, const WindowLayout& w, DemComputeResult& result,
+              RasterPieceWriter& writer, RunContext* context)
+        : mSource(source), mInput(input), mW(w), mResult(result), mWriter(writer), mContext(context)
+    {
+    }
+
+    /// Computes and writes the own cells @p own; @p label names the window in progress.
+    void run(const CellRect& own, const std::string& label)
+    {
+        Stopwatch stage;
+        const Window win = readWindow(mSource, mW, own);
+        mResult.readSeconds += stage.seconds();
+        if (mContext && !label.empty()) mContext->setPrefix(label + ": ");
+        if (mW.oneWindow && win.dem.numValid == 0)
+            throw InvalidInputError(fileName(mInput) + " has no cell with a height (all nodata)");
+        std::vector<std::vector<float>> cells;
+        try {
+            cells = computeWindow(win, mW, totals.diagnostics, mResult, mContext);
+        } catch (const MemoryLimitError& e) {
+            if (mW.oneWindow) throw;  // computeDem lays the raster out in windows and retries
+            if (std::max(own.cols, own.rows) <= std::max(1, mW.narrowHalo)) {
+                std::ostringstream msg;
+                msg << e.what() << "; this is in the window of " << own.cols << " x " << own.rows
+                    << " cells at column " << own.col << ", row " << own.row << " with its halo of " << mW.narrowHalo
+                    << " cells, the smallest the raster is split into";
+                throw MemoryLimitError(msg.str());
+            }
+            ++mResult.splitWindows;
+            const std::vector<CellRect> parts = quarters(own);
+            for (std::size_t k = 0; k < parts.size(); ++k)
+                run(parts[k], (label.empty() ? "" : label + ", ") + "part " + std::to_string(k + 1) + " of " +
+                                  std::to_string(parts.size()));
+            return;
+        }
+        if (mW.oneWindow && mResult.triangles == 0)
+            throw InvalidInputError(fileName(mInput) +
+                                    ": no 2 x 2 block of cells has heights, so there is no surface to compute on");
+        mResult.wideHaloWindows += win.wide;
+        stage.restart();
+        for (int y = win.row; y < win.row + win.rows; ++y)
+            for (int x = win.col; x < win.col + win.cols; ++x) {
+                const std::size_t c = win.boxCell(x, y);
+                totals.ownCellsWithHeight += !std::isnan(win.dem.heights[c]);
+                win.dem.undeclared.count(c, totals.undeclared);
+            }
+        writeOwnCells(win, mW.region, cells, mWriter);
+        mResult.writeSeconds += stage.seconds();
+    }
+
+    WindowTotals totals;
+
+private:
+    const DemSource& mSource;
+    const std::string& mInput;
+    const WindowLayout& mW;
+    DemComputeResult& mResult;
+    RasterPieceWriter& mWriter;
+    RunContext* mContext;
+};
+
+/// Computes every window of @p w into @p writer.
+/// @throw MemoryLimitError if @p w is one window whose surface exceeds the memory limit.
+WindowTotals runWindows(const DemSource& source, const std::string& input, const WindowLayout& w,
+                     DemComputeResult& result, RasterPieceWriter& writer, RunContext* context)
+{
+    WindowRun run(source, input, w, result, writer, context);
+    for (const Diagnostic& d : result.diagnostics)  // the shared plan's
+        if (kept(d, result.plan, w.cell)) run.totals.diagnostics.add(d);
+    result.haloCells = w.wideHalo, result.narrowHaloCells = w.narrowHalo, result.windowCells = w.side;
+    result.windowsPerRow = (w.region.cols + w.side - 1) / w.side;
+    result.windowsPerColumn = (w.region.rows + w.side - 1) / w.side;
+    const int windows = result.windowsPerRow * result.windowsPerColumn;
+    for (int wy = 0; wy < result.windowsPerColumn; ++wy)
+        for (int wx = 0; wx < result.windowsPerRow; ++wx) {
+            const CellRect own{w.region.col + wx * w.side, w.region.row + wy * w.side,
+                               std::min(w.side, w.region.cols - wx * w.side), std::min(w.side, w.region.rows - wy * w.side)};
+            run.run(own, windows > 1 ? "window " + std::to_string(wy * result.windowsPerRow + wx + 1) + " of " +
+                                           std::to_string(windows)
+                                     : std::string());
+        }
+    if (context) context->setPrefix("");
+    return std::move(run.totals);
+}
+
 /// The options' refusals, before anything is read.
 void checkOptions(const DemComputeOptions& options)
 {
@@ -445,13 +562,7 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
     ro.band = options.band;
     const DemSource source(input, ro);
     result.input = source.info();
-    DiagnosticSum diagnostics;
     const WindowLayout w = layWindows(source, input, options, result);
-    for (const Diagnostic& d : result.diagnostics)  // the shared plan's
-        if (kept(d, result.plan, w.cell)) diagnostics.add(d);
-    result.haloCells = w.wideHalo, result.narrowHaloCells = w.narrowHalo, result.windowCells = w.side;
-    result.windowsPerRow = (w.region.cols + w.side - 1) / w.side;
-    result.windowsPerColumn = (w.region.rows + w.side - 1) / w.side;
     result.bands = bands;
     result.computed = options.compute.invariants.selected();
     result.scaled16 = options.output.scaled16;
@@ -464,40 +575,25 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
     grid.transform[3] = t[3] + w.region.col * t[4] + w.region.row * t[5];
     grid.width = w.region.cols, grid.height = w.region.rows;
     RasterPieceWriter writer(output, grid, result.bands, options.output);
-    std::size_t ownCellsWithHeight = 0;
-    std::map<float, std::size_t> undeclared;  // implausible heights taken as nodata, own cells only
-    const int windows = result.windowsPerRow * result.windowsPerColumn;
-    for (int wy = 0; wy < result.windowsPerColumn; ++wy)
-        for (int wx = 0; wx < result.windowsPerRow; ++wx) {
-            stage.restart();
-            const Window win = readWindow(source, w, wx, wy);
-            result.wideHaloWindows += win.wide;
-            result.readSeconds += stage.seconds();
-            if (context && windows > 1)
-                context->setPrefix("window " + std::to_string(wy * result.windowsPerRow + wx + 1) + " of " +
-                                   std::to_string(windows) + ": ");
-            if (w.oneWindow && win.dem.numValid == 0)
-                throw InvalidInputError(fileName(input) + " has no cell with a height (all nodata)");
-            const std::vector<std::vector<float>> cells = computeWindow(win, w, diagnostics, result, context);
-            if (w.oneWindow && result.triangles == 0)
-                throw InvalidInputError(fileName(input) +
-                                        ": no 2 x 2 block of cells has heights, so there is no surface to compute on");
-            stage.restart();
-            for (int y = win.row; y < win.row + win.rows; ++y)
-                for (int x = win.col; x < win.col + win.cols; ++x) {
-                    const std::size_t c = win.boxCell(x, y);
-                    ownCellsWithHeight += !std::isnan(win.dem.heights[c]);
-                    win.dem.undeclared.count(c, undeclared);
-                }
-            writeOwnCells(win, w.region, cells, writer);
-            result.writeSeconds += stage.seconds();
-        }
-    if (context) context->setPrefix("");
+    WindowTotals totals;
+    try {
+        totals = runWindows(source, input, w, result, writer, context);
+    } catch (const MemoryLimitError&) {
+        if (!w.oneWindow) throw;
+        // A raster that fits one window by its cells but not by its surface: in windows, with
+        // the plan of the one piece, as a larger raster (nothing was written yet).
+        stage.restart();
+        const WindowLayout split = layWindows(source, input, options, result, true);
+        result.readSeconds += stage.seconds();
+        totals = runWindows(source, input, split, result, writer, context);
+    }
+    const std::size_t ownCellsWithHeight = totals.ownCellsWithHeight;
+    const std::map<float, std::size_t>& undeclared = totals.undeclared;
     // A part of a mosaic may be all nodata (sea, a tile outside the survey): written as such.
     if (ownCellsWithHeight == 0 && options.region.cols == 0)
         throw InvalidInputError(fileName(input) + " has no cell with a height (all nodata)");
     result.input.numValid = ownCellsWithHeight;
-    result.diagnostics = diagnostics.list();
+    result.diagnostics = totals.diagnostics.list();
     if (!undeclared.empty()) {
         Diagnostic d{"undeclared_nodata", 0, {}, describeUndeclaredNodata(undeclared)};
         for (const auto& [value, cells] : mostCellsFirst(undeclared)) {

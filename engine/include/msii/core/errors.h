@@ -20,6 +20,14 @@ public:
     using Error::Error;
 };
 
+/// A computation would take more memory than it may use (invariants/invariants.h, the
+/// estimate of its surface); thrown before anything large is allocated, so that a caller
+/// may try smaller pieces (terrain/dem_compute.h splits such a window).
+class MemoryLimitError : public InvalidInputError {
+public:
+    using InvalidInputError::InvalidInputError;
+};
+
 /// A file cannot be read or written.
 class IOError : public Error {
 public:

@@ -102,16 +102,25 @@ double patchLinePrecision(const InvariantsOptions& options);
 double chooseVoxelSize(double medianEdge, const std::vector<double>& radii,
                        double minVoxelsPerRadius);
 
-/// Bytes a computation takes per voxel of surface (area / h_0²) at the finest level: its level
+/// Bytes V and S take per voxel of surface (area / h_0²) at the finest level: the level
 /// set's narrow band, the coarser levels and the stencils' passes. Measured where the
 /// surface dominates, on a DEM whose spikes make it 760 times its extent: 1.34 GB for 16.6
 /// million voxels of surface, continuation included.
 constexpr double kBytesPerSurfaceVoxel = 80.0;
 
+/// Bytes P and L take per cell of surface (area / h_0²): the pieces of the triangles, the
+/// sums of the finest samples (a surface crossing the cells obliquely, and the continuation,
+/// give up to 3 samples per cell of area) and the coarser levels. Measured where the
+/// surface dominates, on a DEM whose spikes make it 1000 times its extent: 6.8 GB for about
+/// 17 million cells of surface (docs/limits.md, Memory rule); on a scan all costs together
+/// take 1.3 kB per cell (126 MB for 95,000).
+constexpr double kBytesPerSurfaceSample = 400.0;
+
 /// The estimate of a computation's memory that its surface alone sets (area / h_0² ·
-/// kBytesPerSurfaceVoxel): a lower bound, close for surfaces much larger than their extent
-/// (spikes, noise), below the per-vertex cost otherwise.
-double surfaceBytesEstimate(double area, double voxelSize);
+/// kBytesPerSurfaceVoxel, or kBytesPerSurfaceSample when P or L is computed: they do not
+/// run at once): a lower bound, close for surfaces much larger than their extent (spikes,
+/// noise), below the per-vertex cost otherwise.
+double surfaceBytesEstimate(double area, double voxelSize, const InvariantsOptions& options);
 
 /// The checks and the plan of computeInvariants without the computation: parameters, mesh
 /// check, statistics, the scale plan and its diagnostics, in a result without features. A

@@ -4,8 +4,8 @@
 /// Eq. 2 for all N nested radii, from a sampled surface.
 ///
 /// How (details in src/invariants/patch_line*.cpp; docs/method.md, Patch area and line length):
-/// 1. Samples: the triangles are cut into pieces no larger than the finest cell h0, and the
-///    pieces are gathered per cell into one sample: area, centroid, covariance of position
+/// 1. Samples: the triangles are cut into pieces no larger than the finest cell h0 (slivers
+///    along the cells' planes), and the pieces are gathered per cell into one sample: area, centroid, covariance of position
 ///    and mean normal tensor. Coarser levels (cells 2h0, 4h0, ...) merge 2×2×2 cells exactly.
 /// 2. Each radius uses the coarsest level with r/h >= minCellsPerRadius (gridLevelOfRadius),
 ///    except a coarsest level that would hold a single radius (patchLineLevelOfRadius).

@@ -4,7 +4,8 @@
 /// windows of cells with a halo, each window is triangulated (terrain/dem.h), prepared
 /// (holes filled) and computed, and the chosen features of its own cells are written into
 /// their place in the output raster. The surface is never held whole, so memory stays at
-/// one window's computation whatever the raster's size (docs/terrain.md).
+/// one window's computation whatever the raster's size (docs/terrain.md). A window whose
+/// surface would exceed the memory limit (spikes, noise) is split further (docs/limits.md).
 ///
 /// All windows share one plan: the voxel size and P and L's vertex spacing from the central
 /// window's mesh, and the local frame's origin at the raster's centre; the halo reaches past
@@ -67,6 +68,9 @@ struct DemComputeResult {
     /// the widest gap filled); windows are sized for the wide one.
     int haloCells = 0, narrowHaloCells = 0;
     int wideHaloWindows = 0;       ///< windows that needed the wide halo
+    /// Windows computed in quarters because their surface exceeded the memory limit (spikes
+    /// or noise in the heights); the values do not depend on it.
+    int splitWindows = 0;
     std::size_t triangles = 0;     ///< of all windows' own squares
     MaskedValues masked;           ///< over the own cells in a face of all windows
     InvariantsCost cost;           ///< summed over the windows
