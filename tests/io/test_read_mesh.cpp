@@ -624,6 +624,27 @@ TEST(ReadMesh, ObjVertexThatIsNotFiniteIsNamedByItsLine)
     EXPECT_EQ(readMesh(dir.file("fine.obj")).mesh.numVertices(), 4u);
 }
 
+// An OFF vertex with a coordinate that is not a finite number (out of range, nan, inf) is
+// named as such, with its number; one with too few numbers keeps its own message.
+TEST(ReadMesh, OffVertexThatIsNotFiniteIsNamed)
+{
+    TempDir dir;
+    for (const auto& [name, bad, mentions] :
+         {std::tuple{"huge.off", "1e400 0 0", "vertex 1 has the coordinate '1e400', which is not a finite number"},
+          std::tuple{"nan.off", "0 nan 0", "vertex 1 has the coordinate 'nan', which is not a finite number"},
+          std::tuple{"inf.off", "0 0 -inf", "vertex 1 has the coordinate '-inf', which is not a finite number"},
+          std::tuple{"short.off", "0 0", "vertex 1 is not 3 numbers ('0 0')"}}) {
+        writeFile(dir.file(name), std::string("OFF\n3 1 0\n0 0 0\n") + bad + "\n0 1 0\n3 0 1 2\n");
+        try {
+            readMesh(dir.file(name));
+            ADD_FAILURE() << name << " was read";
+        } catch (const InvalidInputError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find(mentions), std::string::npos) << what;
+        }
+    }
+}
+
 // Messages that quote a file's bytes stay one printable line.
 TEST(Errors, PrintableLineEscapesControlsAndBrokenUtf8)
 {

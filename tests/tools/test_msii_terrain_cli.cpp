@@ -200,7 +200,13 @@ TEST(MsiiTerrain, BadRastersFailCleanly)
     RasterGeoreference degrees = good.georeference;
     degrees.crsWkt = crsWkt("EPSG:4326");
     degrees.transform = {9.0, 1e-5, 0, 49.5, 0, -1e-5};
-    expectCleanFailure(write("degrees.tif", degrees, {{"height", good.heights}}), "", "gdalwarp -t_srs");
+    const std::string inDegrees = write("degrees.tif", degrees, {{"height", good.heights}});
+    expectCleanFailure(inDegrees, "", "gdalwarp -t_srs");
+    // Without a radius too: the input's own problem comes first.
+    const RunResult noRadius = run(MSII_EXE, "compute '" + inDegrees + "'");
+    EXPECT_NE(noRadius.code, 0);
+    EXPECT_EQ(std::count(noRadius.err.begin(), noRadius.err.end(), '\n'), 1) << noRadius.err;
+    EXPECT_NE(noRadius.err.find("geographic coordinates (degrees)"), std::string::npos) << noRadius.err;
     // Bands the computation cannot give: refused before anything is computed, with the names.
     expectCleanFailure(demSample(), "--bands quality,V_99", "there is no feature 'V_99'");
     expectCleanFailure(demSample(), "--invariants V --bands S_04", "there is no feature 'S_04'");

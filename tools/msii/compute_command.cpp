@@ -317,6 +317,8 @@ std::string radiusHint(const std::string& input)
           << ") try --radius " << suggestion
           << " and make R about the size of the largest feature to detect";
         return s.str();
+    } catch (const Error&) {
+        throw;  // the input's own problem (unreadable, in degrees) comes before the missing radius
     } catch (const std::exception&) {
         return "";
     }

@@ -399,6 +399,25 @@ bool numbersOf(std::string_view line, std::vector<T>& out)
     return true;
 }
 
+/// The first of the first @p count words of @p line that is a number out of range or not
+/// finite (1e400, nan, inf), or empty if they are finite numbers or not numbers at all.
+std::string_view firstNonFinite(std::string_view line, std::size_t count)
+{
+    for (std::size_t k = 0; k < count; ++k) {
+        while (!line.empty() && std::isspace(static_cast<unsigned char>(line.front()))) line.remove_prefix(1);
+        std::size_t n = 0;
+        while (n < line.size() && !std::isspace(static_cast<unsigned char>(line[n]))) ++n;
+        const std::string_view word = line.substr(0, n);
+        if (word.empty()) break;
+        const char* p = word.data() + (word.front() == '+' ? 1 : 0);
+        double value = 0;
+        const auto r = std::from_chars(p, word.data() + word.size(), value);
+        if (r.ec == std::errc::result_out_of_range || (r.ec == std::errc() && !std::isfinite(value))) return word;
+        line.remove_prefix(n);
+    }
+    return {};
+}
+
 /// ASCII OFF as real files have it: comments anywhere (also right after the keyword, which
 /// OpenMesh's reader takes for the end of the file), blank lines, the counts on the keyword's
 /// line or the next, colours or normals after a vertex's coordinates or a face's indices
@@ -444,6 +463,9 @@ ReadMeshResult readOffAscii(const std::string& path, const std::string& text)
     while (points.size() < nv) {
         if (!nextLine(text, pos, line)) throw unexpectedEnd(nv, nf, "holds only " + std::to_string(points.size()) + " vertices");
         if (line.empty()) continue;
+        if (const std::string_view word = firstNonFinite(line, homogeneous ? 4u : 3u); !word.empty())
+            throw InvalidInputError("'" + path + "': vertex " + std::to_string(points.size()) + " has the coordinate '" +
+                                    std::string(word) + "', which is not a finite number.");
         if (!numbersOf(line, numbers) || numbers.size() < (homogeneous ? 4u : 3u))
             throw InvalidInputError("'" + path + "': vertex " + std::to_string(points.size()) + " is not 3 numbers ('" +
                                     std::string(line) + "').");
