@@ -270,6 +270,10 @@ ComputeResult runPipeline(const ComputeArgs& args, const std::string& input, con
         if (options.tiling.tiled() && !args.gigamesh)
             return computeStreamed(mesh, options, [&](const ComputedPiece& p) { ply.piece(p); }, &progress);
         return compute(mesh, options, &progress);
+    } catch (const MemoryLimitError& e) {
+        // The engine gives the estimate; the command, the option that computes in pieces.
+        throw MemoryLimitError(fs::path(input).filename().string() + ": " + e.what() +
+                               " (--memory-budget computes the mesh in tiles of that size)");
     } catch (const InvalidInputError& e) {
         const std::string hint = args.strict && std::string(e.what()).find("repair is off") != std::string::npos
                                      ? " (--strict; without it msii repairs this)"

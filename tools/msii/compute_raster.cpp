@@ -90,6 +90,8 @@ OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, c
         // The engine says what to choose; the command says with which option.
         if (const std::size_t at = what.find("choose the height band"); at != std::string::npos)
             what.insert(at + std::string("choose the height band").size(), " with --band");
+        if (dynamic_cast<const MemoryLimitError*>(&e))
+            what += " (--memory-budget sets the memory a window may take)";
         throw InvalidInputError(what.rfind(name, 0) == 0 ? what : name + ": " + what);
     }
     const RasterGeoreference& grid = result.input.georeference;

@@ -84,7 +84,10 @@ std::string gigabytes(double bytes)
     return out.str();
 }
 
-/// Refuses, before anything is allocated, a surface whose level set alone would not fit.
+/// Refuses, before anything is allocated, a surface whose level set or samples alone would
+/// not fit. A surface of more than 20 times the area of as many triangles of its median edge
+/// (a scan or terrain has about 0.4 to 1) is named as spiky or noisy: that is what makes it
+/// large, not its number of triangles.
 void checkSurfaceMemory(const MeshStats& stats, double voxelSize, const InvariantsOptions& options)
 {
     const double limit = options.exact ? 0 : options.memoryLimit;
@@ -93,9 +96,13 @@ void checkSurfaceMemory(const MeshStats& stats, double voxelSize, const Invarian
     std::ostringstream msg;
     msg.precision(3);
     msg << "the surface would take about " << gigabytes(estimate) << " (area " << stats.area << " at the voxel size "
-        << voxelSize << ": " << stats.area / (voxelSize * voxelSize) << " voxels of surface), more than the "
-        << gigabytes(limit) << " the computation may use; a surface this much larger than its extent ("
-        << stats.diagonal << " across) comes from spikes or noise in its coordinates or heights";
+        << voxelSize << ": " << stats.area / (voxelSize * voxelSize) << " cells of surface), more than the "
+        << gigabytes(limit) << " the computation may use";
+    const double typical = double(stats.numTriangles) * stats.medianEdge * stats.medianEdge;
+    if (stats.area > 20.0 * typical)
+        msg << "; its " << stats.numTriangles << " triangles have " << stats.area / typical
+            << " times the area their median edge (" << stats.medianEdge
+            << ") gives, as spikes or noise in the coordinates or heights make them";
     throw MemoryLimitError(msg.str());
 }
 
