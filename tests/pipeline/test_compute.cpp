@@ -273,4 +273,12 @@ TEST(Compute, SpikeFacesAreLeftOutAndTheRestKeepsItsValues)
         EXPECT_NE(what.find("the surface would take about"), std::string::npos) << what;
         EXPECT_NE(what.find("spikes or noise"), std::string::npos) << what;
     }
+    // In tiles too, refused at once (the whole is planned without the check; each tile has it).
+    o.tiling.tilesPerAxis = 2;
+    try {
+        compute(wide, o);
+        ADD_FAILURE() << "the tower was computed in tiles";
+    } catch (const MemoryLimitError& e) {
+        EXPECT_NE(std::string(e.what()).find("the surface would take about"), std::string::npos) << e.what();
+    }
 }

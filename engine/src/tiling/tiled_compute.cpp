@@ -276,7 +276,9 @@ InvariantsResult computeTiles(const TriMesh& mesh, const InvariantsOptions& opti
 {
     const Stopwatch total;
     if (options.exact) throw InvalidInputError("the exact mode is not tiled (restrict it to chosen vertices instead)");
-    InvariantsResult result = planInvariants(mesh, options);
+    InvariantsOptions planning = options;
+    planning.memoryLimit = 0;  // the whole is never computed at once: each tile's surface is checked
+    InvariantsResult result = planInvariants(mesh, planning);
     const double halo = haloWidth(result.plan);
     const TilePlan tp = planTiles(mesh, result, options, tiling, halo);
     const int n = tp.grid.n;
@@ -295,6 +297,9 @@ InvariantsResult computeTiles(const TriMesh& mesh, const InvariantsOptions& opti
     for (int t = 0; t < n * n; ++t) tilesWithVertices += ownVertices.begin(t) != ownVertices.end(t);
     InvariantsOptions tileOptions = options;
     tileOptions.plan = result.plan;  // every tile takes the whole mesh's plan
+    // A tile is sized by its vertices; spikes can still give it a surface the machine cannot
+    // hold: refused at once with the estimate (docs/limits.md, Memory rule).
+    if (tileOptions.memoryLimit == 0) tileOptions.memoryLimit = defaultMemoryLimit();
     tileOptions.evaluatedVertices = 0;  // a tile's numbering is its own
     std::size_t computed = 0;
     std::vector<std::uint32_t> local(nv, kNone), global;  // vertex numbers in and out of the tile
