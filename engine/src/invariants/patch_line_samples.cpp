@@ -131,6 +131,7 @@ void cutAlongCells(const Polygon& poly, int axis, std::array<std::int64_t, 3>& c
 int piecesPerSideOrSliver(const std::array<Vec3, 3>& t, double h0)
 {
     const int m = piecesPerSide(t, h0);
+    if (m <= 8) return m;  // 64 pieces or fewer: cut as they are
     const double area = 0.5 * norm(cross(t[1] - t[0], t[2] - t[0]));
     const double perimeter = norm(t[1] - t[0]) + norm(t[2] - t[1]) + norm(t[0] - t[2]);
     const double pieces = double(m) * m, cells = area / (h0 * h0) + perimeter / h0;
@@ -148,28 +149,32 @@ SampleParts finestSamples(const TriMesh& mesh, double h0, int coarsestLevel)
         const auto& tri = mesh.triangles[t];
         return std::array<Vec3, 3>{mesh.points[tri[0]], mesh.points[tri[1]], mesh.points[tri[2]]};
     };
-    // Slivers are cut along the cells here, each into its own list (in parallel), then joined
-    // in the triangles' order so that the pieces do not depend on the threads.
-    std::vector<std::vector<CellPiece>> sliverPieces(nt);
+    // sides[t]: m, or −(k + 1) for the k-th sliver.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt), [&](const auto& r) {
-        for (std::size_t t = r.begin(); t < r.end(); ++t) {
-            const std::array<Vec3, 3> v = corners(t);
-            sides[t] = piecesPerSideOrSliver(v, h0);
-            if (sides[t] > 0) {
-                first[t + 1] = std::uint64_t(sides[t]) * std::uint64_t(sides[t]);
-                continue;
-            }
-            Polygon poly;
-            poly.corner = {v[0], v[1], v[2]};
-            poly.n = 3;
-            std::array<std::int64_t, 3> cell{};
-            cutAlongCells(poly, 0, cell, h0, sliverPieces[t]);
-            first[t + 1] = sliverPieces[t].size();
+        for (std::size_t t = r.begin(); t < r.end(); ++t) sides[t] = piecesPerSideOrSliver(corners(t), h0);
+    });
+    std::vector<std::uint32_t> slivers;
+    for (std::size_t t = 0; t < nt; ++t)
+        if (sides[t] == 0) {
+            slivers.push_back(std::uint32_t(t));
+            sides[t] = -int(slivers.size());
         }
+    // Slivers are cut along the cells, each into its own list (in parallel); the pieces are
+    // then numbered in the triangles' order, so that they do not depend on the threads.
+    std::vector<std::vector<CellPiece>> sliverPieces(slivers.size());
+    tbb::parallel_for(std::size_t(0), slivers.size(), [&](std::size_t k) {
+        const std::array<Vec3, 3> v = corners(slivers[k]);
+        Polygon poly;
+        poly.corner = {v[0], v[1], v[2]};
+        poly.n = 3;
+        std::array<std::int64_t, 3> cell{};
+        cutAlongCells(poly, 0, cell, h0, sliverPieces[k]);
     });
     for (std::size_t t = 0; t < nt; ++t) {
-        if (sliverPieces[t].size() > 0xffffffffu) throw InvalidInputError("a triangle is too large for the sample cells");
-        first[t + 1] += first[t];
+        const int m = sides[t];
+        const std::size_t count = m > 0 ? std::size_t(m) * std::size_t(m) : sliverPieces[std::size_t(-m - 1)].size();
+        if (m < 0 && count > 0xffffffffu) throw InvalidInputError("a triangle is too large for the sample cells");
+        first[t + 1] = first[t] + count;
     }
 
     std::vector<Piece> pieces(first[nt]);
@@ -177,9 +182,9 @@ SampleParts finestSamples(const TriMesh& mesh, double h0, int coarsestLevel)
         for (std::size_t t = r.begin(); t < r.end(); ++t) {
             const int m = sides[t];
             std::uint64_t k = first[t];
-            if (m == 0) {
+            if (m < 0) {
                 std::uint32_t c = 0;
-                for (const CellPiece& piece : sliverPieces[t]) pieces[k++] = {piece.key, std::uint32_t(t), c++};
+                for (const CellPiece& piece : sliverPieces[std::size_t(-m - 1)]) pieces[k++] = {piece.key, std::uint32_t(t), c++};
                 continue;
             }
             const std::array<Vec3, 3> v = corners(t);
@@ -210,8 +215,8 @@ SampleParts finestSamples(const TriMesh& mesh, double h0, int coarsestLevel)
         for (std::size_t i = chunks[c]; i < chunks[c + 1]; ++i) {
             const Piece& p = pieces[i];
             const int m = sides[p.triangle];
-            if (m == 0) {  // a sliver's part in the cell: its sums, with the triangle's normal
-                const CellPiece& piece = sliverPieces[p.triangle][p.sub];
+            if (m < 0) {  // a sliver's part in the cell: its sums, with the triangle's normal
+                const CellPiece& piece = sliverPieces[std::size_t(-m - 1)][p.sub];
                 const std::array<Vec3, 3> v = corners(p.triangle);
                 const Vec3 nrm = normalized(cross(v[1] - v[0], v[2] - v[0]));
                 if (out.empty() || out.back().key != p.key) out.push_back(SampleSums{p.key, 0, {}, {}, {}, piece.centroid});

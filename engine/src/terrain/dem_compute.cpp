@@ -194,7 +194,7 @@ WindowLayout layWindows(const DemSource& source, const std::string& input, const
     const double cell = shortestCellStep(grid);
     w.cell = cell;
     const double budget =
-        options.compute.tiling.memoryBudget > 0 ? options.compute.tiling.memoryBudget : kDefaultDemMemoryBudget;
+        options.compute.tiling.memoryBudget > 0 ? options.compute.tiling.memoryBudget : defaultDemMemoryBudget();
     w.options.invariants.memoryLimit = budget;  // a window whose surface exceeds it stops at once
     const double cellsPerWindow = budget / computationBytesPerVertex(asked);
     w.oneWindow = options.windowCells == 0 ? double(w.width) * double(w.height) <= cellsPerWindow

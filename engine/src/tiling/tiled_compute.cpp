@@ -164,6 +164,12 @@ double defaultMemoryLimit()
     return pages > 0 && pageSize > 0 ? 0.75 * double(pages) * double(pageSize) : 0.0;
 }
 
+double defaultDemMemoryBudget()
+{
+    const double machine = defaultMemoryLimit();
+    return machine > 0 ? std::min(kDefaultDemMemoryBudget, machine) : kDefaultDemMemoryBudget;
+}
+
 double haloWidth(const ScalePlan& plan) { return plan.reach + 4.0 * plan.voxelSize; }
 
 std::vector<int> tileOfVertices(const TriMesh& mesh, int tilesPerAxis)

@@ -27,7 +27,7 @@ namespace msii {
 struct DemComputeOptions {
     /// What each window runs (pipeline/compute.h): radius, scales, precision, which
     /// invariants (not exact); nodata gaps are holes, filled up to maxHolePerimeter (-1: πR).
-    /// tiling.memoryBudget sizes the windows (0: kDefaultDemMemoryBudget); windows are the
+    /// tiling.memoryBudget sizes the windows (0: defaultDemMemoryBudget); windows are the
     /// tiling, so no tilesPerAxis.
     ComputeOptions compute;
     int band = 0;                   ///< DemReadOptions::band

@@ -24,7 +24,7 @@ struct TilingOptions {
     /// Memory for the whole computation in bytes: pieces (tiles, DEM windows) are made small
     /// enough that one piece's computation (computationBytesPerVertex per vertex, halo
     /// included) fits next to what stays whole. 0: no limit, so a mesh is one piece; a DEM,
-    /// read in windows and never held whole, is then sized for kDefaultDemMemoryBudget.
+    /// read in windows and never held whole, is then sized for defaultDemMemoryBudget().
     double memoryBudget = 0;
     /// Tiles along each of the two longest axes of the mesh; 0 = from the budget.
     int tilesPerAxis = 0;
@@ -39,12 +39,18 @@ struct TilingOptions {
     bool tiled() const { return memoryBudget != 0 || tilesPerAxis != 0; }
 };
 
-/// The memory budget of a DEM computed without one (TilingOptions::memoryBudget = 0).
+/// The memory budget of a DEM computed without one (TilingOptions::memoryBudget = 0), on a
+/// machine of 4 GB or more (defaultDemMemoryBudget).
 constexpr double kDefaultDemMemoryBudget = 3e9;
 
 /// The memory a computation without a budget may take: three quarters of the machine's
 /// (InvariantsOptions::memoryLimit).
 double defaultMemoryLimit();
+
+/// The memory budget of a DEM computed without one: kDefaultDemMemoryBudget, or
+/// defaultMemoryLimit on a machine with less. The values do not depend on it, only how many
+/// windows there are.
+double defaultDemMemoryBudget();
 
 /// Peak bytes per vertex of one piece's computation with these options: 1,700 with P or L at
 /// N = 16 (a little above the 1.1M-vertex benchmark's, docs/performance.md), 1,200 with V
