@@ -41,10 +41,15 @@ void add(SampleSums& s, double a, const Vec3& centroid, const Vec3& nrm, const s
 
 double coordinate(const Vec3& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
 
-/// A convex polygon: a triangle clipped by the six planes of a cell has at most 9 corners.
+/// A convex polygon: a triangle clipped by the six planes of a cell has at most 9 corners
+/// (rounding can make a nearly flat one cross a plane more often: the rest is dropped).
 struct Polygon {
-    std::array<Vec3, 12> corner;
+    std::array<Vec3, 16> corner;
     int n = 0;
+    void add(const Vec3& p)
+    {
+        if (n < int(corner.size())) corner[std::size_t(n++)] = p;
+    }
 };
 
 /// The part of @p in with coordinate @p axis at least @p bound (@p above) or at most it
@@ -57,8 +62,8 @@ Polygon clipped(const Polygon& in, int axis, double bound, bool above)
         const Vec3& b = in.corner[std::size_t((i + 1) % in.n)];
         const double da = above ? coordinate(a, axis) - bound : bound - coordinate(a, axis);
         const double db = above ? coordinate(b, axis) - bound : bound - coordinate(b, axis);
-        if (da >= 0) out.corner[std::size_t(out.n++)] = a;
-        if ((da >= 0) != (db >= 0)) out.corner[std::size_t(out.n++)] = a + (b - a) * (da / (da - db));
+        if (da >= 0) out.add(a);
+        if ((da >= 0) != (db >= 0)) out.add(a + (b - a) * (da / (da - db)));
     }
     return out;
 }
@@ -135,7 +140,7 @@ int piecesPerSideOrSliver(const std::array<Vec3, 3>& t, double h0)
     const double area = 0.5 * norm(cross(t[1] - t[0], t[2] - t[0]));
     const double perimeter = norm(t[1] - t[0]) + norm(t[2] - t[1]) + norm(t[0] - t[2]);
     const double pieces = double(m) * m, cells = area / (h0 * h0) + perimeter / h0;
-    return m > 0x7fff || (pieces > 64 && pieces > 16 * cells) ? 0 : m;
+    return m > 0x7fff || pieces > 16 * cells ? 0 : m;
 }
 
 } // namespace
@@ -231,7 +236,7 @@ SampleParts finestSamples(const TriMesh& mesh, double h0, int coarsestLevel)
             const Vec3 centroid = (c3[0] + c3[1] + c3[2]) / 3.0;
             if (out.empty() || out.back().key != p.key) out.push_back(SampleSums{p.key, 0, {}, {}, {}, centroid});
             // ∫ (x − o)(x − o)ᵀ dA over the piece: a (v vᵀ + Σ_k e_k e_kᵀ / 12), v = c − o,
-            // e_k = corner k − c.
+            // e_k = corner k − c (what add() does, summed in this order to keep the bits).
             const Vec3 offset = centroid - out.back().origin;
             std::array<double, 6> second = outer(offset, offset);
             for (const Vec3& corner : c3) {

@@ -238,9 +238,8 @@ struct CellRect {
     int col = 0, row = 0, cols = 0, rows = 0;
 };
 
-/// A window's own cells [col, col + cols) × [row, row + rows) and the box read around them.
-struct Window {
-    int col = 0, row = 0, cols = 0, rows = 0;
+/// A window's own cells and the box read around them.
+struct Window : CellRect {
     std::array<int, 4> box{};  ///< x0, y0, x1, y1 of the cells read
     bool wide = false;
     Dem dem;
@@ -281,17 +280,17 @@ bool hasOpenGap(const std::vector<float>& heights, int bw, int bh, double cell, 
     return false;
 }
 
-/// Reads the window of own cells @p own with the narrow halo, or the wide one if a nodata gap crosses the
-/// narrow one's edge: such a gap would be filled in the whole DEM but is a border in the
-/// window. A gap that crosses has a cell on the narrow window's outermost rows or columns
-/// (those on the DEM's edge excepted: there the whole DEM has the same border). When
-/// borders are continued, a border in the narrow box (the DEM's edge, a gap too large to
-/// fill) takes the wide one: the continuation the own cells see depends on the raster that
-/// far (continuationReach).
+/// Reads the window of own cells @p own with the narrow halo, or the wide one if a nodata
+/// gap crosses the narrow one's edge: such a gap would be filled in the whole DEM but is a
+/// border in the window. A gap that crosses has a cell on the narrow window's outermost rows
+/// or columns (those on the DEM's edge excepted: there the whole DEM has the same border).
+/// When borders are continued, a border in the narrow box (the DEM's edge, a gap too large
+/// to fill) takes the wide one: the continuation the own cells see depends on the raster
+/// that far (continuationReach).
 Window readWindow(const DemSource& source, const WindowLayout& w, const CellRect& own)
 {
     Window win;
-    win.col = own.col, win.row = own.row, win.cols = own.cols, win.rows = own.rows;
+    static_cast<CellRect&>(win) = own;
     const auto boxOf = [&](int halo) {
         return std::array<int, 4>{std::max(0, win.col - halo), std::max(0, win.row - halo),
                                   std::min(w.width, win.col + win.cols + halo), std::min(w.height, win.row + win.rows + halo)};
@@ -587,16 +586,14 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
         result.readSeconds += stage.seconds();
         totals = runWindows(source, input, split, result, writer, context);
     }
-    const std::size_t ownCellsWithHeight = totals.ownCellsWithHeight;
-    const std::map<float, std::size_t>& undeclared = totals.undeclared;
     // A part of a mosaic may be all nodata (sea, a tile outside the survey): written as such.
-    if (ownCellsWithHeight == 0 && options.region.cols == 0)
+    if (totals.ownCellsWithHeight == 0 && options.region.cols == 0)
         throw InvalidInputError(fileName(input) + " has no cell with a height (all nodata)");
-    result.input.numValid = ownCellsWithHeight;
+    result.input.numValid = totals.ownCellsWithHeight;
     result.diagnostics = totals.diagnostics.list();
-    if (!undeclared.empty()) {
-        Diagnostic d{"undeclared_nodata", 0, {}, describeUndeclaredNodata(undeclared)};
-        for (const auto& [value, cells] : mostCellsFirst(undeclared)) {
+    if (!totals.undeclared.empty()) {
+        Diagnostic d{"undeclared_nodata", 0, {}, describeUndeclaredNodata(totals.undeclared)};
+        for (const auto& [value, cells] : mostCellsFirst(totals.undeclared)) {
             d.count += cells;
             if (d.figures.size() < 4) d.figures.emplace_back("value_" + std::to_string(d.figures.size() + 1), value);
         }
