@@ -1,0 +1,76 @@
+// Reading a view folder: data.json (the header) and data.bin (the sections it lists).
+// The format is described in docs/view.md, "The folder".
+
+/** The code of a value that is not there (NaN in the feature file, nodata in a raster). */
+export const NAN_CODE = 65535;
+
+const TYPES = {
+  float32: Float32Array,
+  uint32: Uint32Array,
+  uint16: Uint16Array,
+  int8: Int8Array,
+};
+
+/** Fetches the header and the binary file of the folder at `base`. */
+export async function fetchView(base) {
+  const get = async (name) => {
+    const response = await fetch(new URL(name, base));
+    if (!response.ok) throw new Error(`${name}: HTTP ${response.status}`);
+    return response;
+  };
+  const [header, bin] = await Promise.all([
+    get('data.json').then((r) => r.json()),
+    get('data.bin').then((r) => r.arrayBuffer()),
+  ]);
+  if (!String(header.format).startsWith('msii-view 1')) {
+    throw new Error(`data.json is not a view of msii 1 (format ${header.format})`);
+  }
+  return { header, bin };
+}
+
+/** The zlib stream `bytes` inflated, by the browser's own zlib. */
+async function inflate(bytes) {
+  const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream('deflate'));
+  return new Uint8Array(await new Response(stream).arrayBuffer());
+}
+
+/**
+ * The typed array of section `name` of `header.sections`, decoded: inflated, its byte
+ * planes put back together, and its differences summed where the writer took them.
+ */
+export async function decodeSection(header, bin, name) {
+  const s = header.sections[name];
+  if (!s) throw new Error(`data.json lists no section '${name}'`);
+  const Type = TYPES[s.type];
+  const size = Type.BYTES_PER_ELEMENT;
+  const raw = await inflate(new Uint8Array(bin, s.offset, s.bytes));
+  if (raw.length !== s.count * size) {
+    throw new Error(`section ${name}: ${raw.length} bytes, expected ${s.count * size}`);
+  }
+  let bytes = raw;
+  if (s.planes && size > 1) {
+    // Plane b holds byte b of every element: deflate finds the slowly varying high bytes
+    // of neighbouring values far more alike than interleaved ones.
+    bytes = new Uint8Array(raw.length);
+    const n = s.count;
+    for (let b = 0; b < size; b++) {
+      const plane = raw.subarray(b * n, (b + 1) * n);
+      for (let i = 0, j = b; i < n; i++, j += size) bytes[j] = plane[i];
+    }
+  }
+  const values = new Type(bytes.buffer, bytes.byteOffset, s.count);
+  if (s.delta) {
+    // Each element was stored as its difference to the previous one, modulo the type's
+    // range; the typed array wraps the sums the same way.
+    for (let i = 1; i < values.length; i++) values[i] += values[i - 1];
+  }
+  return values;
+}
+
+/**
+ * A quantized column: value = lo + q · step for q < NAN_CODE; NAN_CODE marks a missing value.
+ * `column` is its entry in header.columns.
+ */
+export function dequantize(column, q) {
+  return q === NAN_CODE ? NaN : column.lo + q * column.step;
+}
