@@ -25,7 +25,11 @@ packages=(
   libgdal-dev
   libcli11-dev nlohmann-json3-dev
   libgtest-dev
+  libcpp-httplib-dev
 )
+# msii view's page takes three.js from npm (npm ci below): node and npm, from Debian where missing.
+command -v node >/dev/null 2>&1 || packages+=(nodejs)
+command -v npm >/dev/null 2>&1 || packages+=(npm)
 # The tests also run the Snakemake workflow of samples/snakemake, and check GeoTIFFs with gdalinfo.
 [ "$with_tests" = ON ] && packages+=(snakemake gdal-bin python3-gdal)
 # ... and the Python module's tests and its documented example (plots with matplotlib),
@@ -34,6 +38,8 @@ packages=(
 [ "$with_tests" = ON ] && packages+=(python3-pytest python3-matplotlib
   python3-venv python3-pip python3-setuptools python3-wheel
   qgis python3-qgis qgis-providers)
+# ... and msii view's page in a real browser (tests/view, driven by playwright-core from npm).
+[ "$with_tests" = ON ] && packages+=(chromium)
 
 missing=()
 for p in "${packages[@]}"; do
@@ -55,6 +61,14 @@ if [ ${#missing[@]} -gt 0 ]; then
   export DEBIAN_FRONTEND=noninteractive
   "${sudo[@]}" apt-get update -qq
   "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+# three.js (and, for the tests, playwright-core), as package-lock.json pins them; again when
+# the lock file changed or the tests need what an earlier install left out.
+modules="$here/node_modules"
+if [ ! -f "$modules/.package-lock.json" ] || [ "$here/package-lock.json" -nt "$modules/.package-lock.json" ] ||
+   { [ "$with_tests" = ON ] && [ ! -d "$modules/playwright-core" ]; }; then
+  (cd "$here" && npm ci --no-audit --no-fund $([ "$with_tests" = ON ] || echo --omit=dev))
 fi
 
 cmake -S "$here" -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DMSII_BUILD_TESTS="$with_tests" \

@@ -62,5 +62,7 @@ std::function<int()> addSegmentCommand(CLI::App& app);
 std::function<int()> addOutlineCommand(CLI::App& app);
 /// Adds `msii merge` (joins tiles computed separately).
 std::function<int()> addMergeCommand(CLI::App& app);
+/// Adds `msii view` (a web page of the features, served on 127.0.0.1).
+std::function<int()> addViewCommand(CLI::App& app);
 
 } // namespace msii::tools

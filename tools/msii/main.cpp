@@ -24,6 +24,7 @@ int main(int argc, char** argv)
     auto runSegment = msii::tools::addSegmentCommand(app);
     auto runOutline = msii::tools::addOutlineCommand(app);
     auto runMerge = msii::tools::addMergeCommand(app);
+    auto runView = msii::tools::addViewCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::Success& e) {  // --help, --help-all, --version
@@ -41,6 +42,7 @@ int main(int argc, char** argv)
         if (app.got_subcommand("segment")) return runSegment();
         if (app.got_subcommand("outline")) return runOutline();
         if (app.got_subcommand("merge")) return runMerge();
+        if (app.got_subcommand("view")) return runView();
     } catch (const std::bad_alloc&) {
         std::cerr << "msii: error: out of memory (try a larger --voxel-size)\n";
         return 1;
