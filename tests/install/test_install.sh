@@ -23,6 +23,10 @@ cmake --build "$work/examples" -j 2 > "$work/build.log" 2>&1 || { cat "$work/bui
 [ "$(wc -l < "$work/outside.csv")" -gt 100 ] || fail "the example's CSV is too short"
 cmp -s "$work/outside.csv" "$work/inside.csv" || fail "the installed library's example differs from the in-tree one"
 "$prefix/bin/msii" --version > /dev/null || fail "the installed msii does not run"
+# msii view finds its page where it is installed (share/msii/view beside bin/).
+"$prefix/bin/msii" compute "$work/tablet.ply" -r 0.5 -q -o "$work/tablet.msii.ply" || fail "the installed msii compute"
+"$prefix/bin/msii" view "$work/tablet.msii.ply" --no-serve -q || fail "the installed msii view"
+[ -f "$work/tablet.msii.view/three/three.module.js" ] || fail "the installed msii view wrote no three.js"
 # The QGIS plugin, with the file that names the installed program.
 plugin="$prefix/share/msii/qgis/msii_processing"
 [ -f "$plugin/metadata.txt" ] && [ -f "$plugin/program.py" ] || fail "no QGIS plugin in $plugin"
