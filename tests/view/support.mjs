@@ -4,7 +4,7 @@ import { spawn, execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import zlib from 'node:zlib';
-import { chromium } from 'playwright-core';
+import { chromium, firefox } from 'playwright-core';
 
 /** The flags of headless Chromium with software WebGL (SwiftShader), no network of its own. */
 export const CHROMIUM_FLAGS = [
@@ -13,9 +13,16 @@ export const CHROMIUM_FLAGS = [
   '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
 ];
 
-/** Launches `executable` (Debian's /usr/bin/chromium); playwright gives it a fresh profile folder. */
-export async function launchChromium(executable = '/usr/bin/chromium') {
-  return chromium.launch({ executablePath: executable, headless: true, args: CHROMIUM_FLAGS });
+/**
+ * Launches Debian's chromium (`executable`, default /usr/bin/chromium), or with `name`
+ * "firefox" Debian's firefox-esr through WebDriver BiDi (playwright's moz-firefox channel,
+ * for a stock Firefox); playwright gives either a fresh profile folder.
+ */
+export async function launchBrowser(name = 'chromium', executable = null) {
+  if (name === 'firefox') {
+    return firefox.launch({ channel: 'moz-firefox', executablePath: executable || '/usr/bin/firefox-esr', headless: true });
+  }
+  return chromium.launch({ executablePath: executable || '/usr/bin/chromium', headless: true, args: CHROMIUM_FLAGS });
 }
 
 /** Runs a program to its end; throws with its stderr if it fails. */

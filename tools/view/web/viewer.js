@@ -146,11 +146,19 @@ function indexColumns() {
 // Drawing
 
 const canvas = $('canvas');
-const renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: false });
-renderer.outputColorSpace = THREE.LinearSRGBColorSpace; // the shaders write sRGB as msii render does
-renderer.setPixelRatio(window.devicePixelRatio || 1);
-renderer.setClearColor(0xffffff, 1);
+let renderer = null; // made in main(), where a browser without WebGL 2 is told so
 const scene = new THREE.Scene();
+
+function makeRenderer() {
+  try {
+    renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: false });
+  } catch (e) {
+    throw new Error(`this browser offers no WebGL 2 (${e.message})`);
+  }
+  renderer.outputColorSpace = THREE.LinearSRGBColorSpace; // the shaders write sRGB as msii render does
+  renderer.setPixelRatio(window.devicePixelRatio || 1);
+  renderer.setClearColor(0xffffff, 1);
+}
 let camera = null;
 let controls = null;
 let object = null;     // the mesh, or the map's plane
@@ -1211,12 +1219,20 @@ async function applyState(s) {
     if (s.show === 'distance' || s.show === undefined) state.show = 'distance';
     await select(s.sel);
   } else {
+    if (state.sel !== null) clearSelection();
     if (state.show === 'distance') state.show = defaultColumn();
     await show(state.show);
   }
 }
 
 async function main() {
+  if (location.protocol === 'file:') {
+    throw new Error('open this page through a web server: msii view FOLDER serves it, as does python3 -m http.server in the folder');
+  }
+  if (typeof DecompressionStream === 'undefined') {
+    throw new Error('this browser cannot inflate the data (DecompressionStream: Chrome 80, Firefox 113, Safari 16.4 and later)');
+  }
+  makeRenderer();
   const { header, bin } = await fetchView(new URL('.', location.href));
   timings.fetched = performance.now();
   view.header = header;
