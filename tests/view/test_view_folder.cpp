@@ -67,8 +67,13 @@ TEST(QuantizeColumn, ValuesAreWithinHalfAStepAndNaNIsMarked)
     EXPECT_EQ(q.missing, 2u);
     EXPECT_EQ(q.codes[17], kViewMissingCode);
     EXPECT_EQ(q.codes[18], kViewMissingCode);
-    EXPECT_NEAR(q.step, (q.max - q.min) / 65534, 1e-15);
-    EXPECT_LT(q.maxError(), 0.6 / 65534);  // the stated precision: (max − min)/65534/2
+    // A power of two, just large enough; lo on its grid, at or below the minimum.
+    EXPECT_EQ(q.step, std::exp2(std::round(std::log2(q.step))));
+    EXPECT_GE(q.step, (q.max - q.min) / 65532);
+    EXPECT_LT(q.step, 2 * (q.max - q.min) / 65532);
+    EXPECT_EQ(q.lo, std::floor(q.lo / q.step) * q.step);
+    EXPECT_LE(q.lo, q.min);
+    EXPECT_LE(q.maxError(), (q.max - q.min) / 65532);  // the stated precision
     double worst = 0;
     std::size_t compared = 0;
     for (std::size_t i = 0; i < v.size(); ++i) {
@@ -80,19 +85,27 @@ TEST(QuantizeColumn, ValuesAreWithinHalfAStepAndNaNIsMarked)
     EXPECT_EQ(compared, v.size() - 2);
     EXPECT_LE(worst, q.maxError() * (1 + 1e-9));
     EXPECT_GT(worst, 0.5 * q.maxError());  // the bound is the real one, not a loose one
-    // The extremes are exact.
-    std::size_t lo = 0, hi = 0;
-    for (std::size_t i = 0; i < 17; ++i) {
-        if (v[i] < v[lo]) lo = i;
-        if (v[i] > v[hi]) hi = i;
-    }
-    for (std::size_t i = 19; i < v.size(); ++i) {
-        if (v[i] < v[lo]) lo = i;
-        if (v[i] > v[hi]) hi = i;
-    }
-    EXPECT_EQ(q.codes[lo], 0);
-    EXPECT_EQ(q.codes[hi], 65534);
-    EXPECT_EQ(decoded(q, lo), double(v[lo]));
+    for (std::uint16_t c : q.codes) EXPECT_TRUE(c <= 65534 || c == kViewMissingCode);
+}
+
+TEST(QuantizeColumn, EqualValuesStayEqualAcrossColumnsAndFlatValuesAreExact)
+{
+    // Two columns of different ranges hold the same values (a feature vector constant over
+    // the radii): their decoded values must be equal too, as msii metric's constancy tests
+    // need, and the flat surface's 0.5 must decode to 0.5 exactly.
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0.45f, 0.55f);
+    std::vector<float> a(1000), b(1000);
+    for (std::size_t i = 0; i < a.size(); ++i) a[i] = b[i] = u(rng);
+    a[0] = 0.1f, b[0] = 0.9f;  // different ranges, so different lo
+    a[1] = b[1] = 0.5f;
+    const QuantizedColumn qa = quantizeColumn(a), qb = quantizeColumn(b);
+    EXPECT_NE(qa.lo, qb.lo);
+    std::size_t compared = 0;
+    for (std::size_t i = 1; i < a.size(); ++i, ++compared) EXPECT_EQ(decoded(qa, i), decoded(qb, i)) << i;
+    EXPECT_EQ(compared, a.size() - 1);
+    EXPECT_EQ(decoded(qa, 1), 0.5);
+    EXPECT_EQ(decoded(qb, 1), 0.5);
 }
 
 TEST(QuantizeColumn, WholeNumbersAreExactConstantsAndEmptyColumnsAreValid)
@@ -172,7 +185,8 @@ TEST(WriteViewFolder, WritesThePageTheHeaderAndTheData)
     const nlohmann::json& c = h["columns"][0];
     EXPECT_EQ(c["name"], "V_01");
     EXPECT_EQ(c["missing"], 1);
-    EXPECT_NEAR(c["max_error"].get<double>(), 0.5 / 65534 / 2, 1e-15);
+    EXPECT_EQ(c["step"].get<double>(), std::exp2(-16));  // the power of two above 0.5/65532
+    EXPECT_EQ(c["max_error"].get<double>(), std::exp2(-17));
     EXPECT_NEAR(r.largestError, c["max_error"].get<double>(), 1e-15);
     // The sections tile data.bin, and each reads back.
     std::ifstream binFile(folder + "/data.bin", std::ios::binary);
@@ -192,7 +206,7 @@ TEST(WriteViewFolder, WritesThePageTheHeaderAndTheData)
         if (name == "column:V_01") {
             std::vector<std::uint16_t> q(4);
             std::memcpy(q.data(), back.data(), 8);
-            EXPECT_EQ(q, (std::vector<std::uint16_t>{0, 32767, 65534, kViewMissingCode}));
+            EXPECT_EQ(q, (std::vector<std::uint16_t>{0, 16384, 32768, kViewMissingCode}));
         }
         ++sections;
     }

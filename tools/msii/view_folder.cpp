@@ -191,15 +191,24 @@ QuantizedColumn quantizeColumn(const std::vector<float>& values, bool integer)
     }
     q.lo = lo, q.min = lo, q.max = hi;
     constexpr double kLevels = kViewMissingCode - 1;  // codes 0 … 65534
-    if (integer && whole && hi - lo <= kLevels) q.step = 1, q.exact = true;
-    else if (hi > lo) q.step = (hi - lo) / kLevels;
+    if (integer && whole && hi - lo <= kLevels) {
+        q.step = 1, q.exact = true;
+    } else if (hi > lo) {
+        // A power of two, and lo a multiple of it: every decoded value lo + code·step is then
+        // exact in double, and all columns share one grid, so values equal in the file stay
+        // equal (msii metric tests feature vectors for constancy) and the flat surface's 0.5
+        // and 1 are exact. The price: a step up to twice (max − min)/65534. Two levels spare
+        // for lo rounded down and max rounded up.
+        q.step = std::exp2(std::ceil(std::log2((hi - lo) / (kLevels - 2))));
+        q.lo = std::floor(lo / q.step) * q.step;
+    }
     for (std::size_t i = 0; i < values.size(); ++i) {
         const float v = values[i];
         if (!std::isfinite(v)) {
             ++q.missing;
             continue;
         }
-        const double code = q.step > 0 ? std::round((double(v) - lo) / q.step) : 0.0;
+        const double code = q.step > 0 ? std::round((double(v) - q.lo) / q.step) : 0.0;
         q.codes[i] = std::uint16_t(std::clamp(code, 0.0, kLevels));
     }
     return q;

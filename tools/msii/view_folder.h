@@ -3,9 +3,9 @@
 /// @brief The folder that `msii view` writes: the page and three.js, and the mesh (or the
 /// raster) with its features in `data.bin`, described by `data.json` (docs/view.md).
 ///
-/// Values are stored as 16-bit codes per column over the column's finite range, so a value
-/// is within half a step, (max − min)/65534/2, of the float it came from; code 65535 marks
-/// NaN. Every section of data.bin is a zlib stream that the browser inflates itself
+/// Values are stored as 16-bit codes per column over the column's finite range, in steps
+/// of a power of two at most (max − min)/32766, so a value is within half a step of the
+/// float it came from; code 65535 marks NaN. Every section of data.bin is a zlib stream that the browser inflates itself
 /// (DecompressionStream), after its bytes were split into planes and, for codes and
 /// indices, replaced by the differences between neighbours: both make the slowly varying
 /// part of the numbers repeat, which deflate then removes.
@@ -34,8 +34,10 @@ struct ViewColumn {
 
 /// A column as 16-bit codes: value = lo + code · step for code < kViewMissingCode.
 struct QuantizedColumn {
-    double lo = 0;    ///< the smallest finite value (0 if there is none)
-    double step = 0;  ///< (max − min)/65534, 1 for whole numbers whose range fits; 0 for a constant column
+    double lo = 0;    ///< a multiple of step at or below the smallest finite value (0 if there is none)
+    /// The smallest power of two with (max − min)/step ≤ 65532 (so at most 2·(max − min)/65532);
+    /// 1 for whole numbers whose range fits; 0 for a constant column.
+    double step = 0;
     double min = std::numeric_limits<double>::quiet_NaN();  ///< of the finite values
     double max = std::numeric_limits<double>::quiet_NaN();
     std::size_t missing = 0;  ///< values coded kViewMissingCode (NaN and infinities)
@@ -45,7 +47,8 @@ struct QuantizedColumn {
     double maxError() const { return exact ? 0 : step / 2; }
 };
 
-/// Codes of @p values over their finite range [min, max] in 65,535 levels; NaN and ±∞ get
+/// Codes of @p values over their finite range [min, max] on a grid of power-of-two steps
+/// (decoded exactly in double; equal values keep equal codes' values); NaN and ±∞ get
 /// kViewMissingCode. Whole numbers (@p integer) whose range is at most 65,534 get step 1
 /// and are exact.
 QuantizedColumn quantizeColumn(const std::vector<float>& values, bool integer = false);

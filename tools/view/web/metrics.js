@@ -506,22 +506,31 @@ function kernelSource(t, o, opt, cache) {
   } else {
     return null;
   }
-  return `for (let i = 0, b = 0; i < ${t.n}; i++, b += ${dim}) {
-  if (nan[i] === 1) { out[i] = NaN; continue; }
+  return `let undefinedCount = 0;
+for (let i = 0, b = 0; i < ${t.n}; i++, b += ${dim}) {
+  if (nan[i] === 1) { out[i] = NaN; shown[i] = ${literal(MISSING)}; undefinedCount++; continue; }
   ${lines.join('\n  ')}
-  out[i] = ${result};
-}`;
+  const f = ${result};
+  out[i] = f;
+  if (f === f) shown[i] = f;
+  else { shown[i] = ${literal(MISSING)}; undefinedCount++; }
+}
+return undefinedCount;`;
 }
 
 /** Whether kernels may be compiled (false: a Content-Security-Policy forbids it, or a test asks for the loops). */
 export const compiling = { allowed: true };
 
+/** What stands in for NaN in `shown` (a GPU's shader cannot be relied on to test for NaN). */
+export const MISSING = 3.0e38;
+
 /**
  * f per vertex into `out` (a Float32Array, as msii metric writes it), NaN where a vertex
- * has a NaN element or the metric is undefined there. `cache` keeps what does not depend
- * on the reference (the variances) for this table.
+ * has a NaN element or the metric is undefined there, and the same into `shown` with
+ * MISSING for NaN. Returns how many are NaN. `cache` keeps what does not depend on the
+ * reference (the variances) for this table.
  */
-export function computeMetric(table, reference, name, p, out, cache) {
+export function computeMetric(table, reference, name, p, out, shown, cache) {
   const opt = metricOptions(name, p);
   if (reference.length !== table.dim) throw new Error('the reference does not fit the feature table');
   if (compiling.allowed) {
@@ -529,16 +538,27 @@ export function computeMetric(table, reference, name, p, out, cache) {
     if (source) {
       let kernel = null;
       try {
-        kernel = new Function('codes', 'nan', 'out', source); // eslint-disable-line no-new-func
+        kernel = new Function('codes', 'nan', 'out', 'shown', source); // eslint-disable-line no-new-func
       } catch {
         compiling.allowed = false;
       }
-      if (kernel) {
-        kernel(table.codes, table.nan, out);
-        return out;
-      }
+      if (kernel) return kernel(table.codes, table.nan, out, shown);
     }
   }
+  computeWithLoops(table, reference, opt, out, cache);
+  let undefinedCount = 0;
+  for (let i = 0; i < out.length; i++) {
+    const f = out[i];
+    if (f === f) shown[i] = f;
+    else {
+      shown[i] = MISSING;
+      undefinedCount++;
+    }
+  }
+  return undefinedCount;
+}
+
+function computeWithLoops(table, reference, opt, out, cache) {
   switch (opt.kind) {
     case 'pnorm': pNorm(table, reference, opt, out); break;
     case 'mahalanobis': mahalanobis(table, reference, out); break;
@@ -560,5 +580,4 @@ export function computeMetric(table, reference, name, p, out, cache) {
       break;
     default: throw new Error(`unknown metric kind ${opt.kind}`);
   }
-  return out;
 }
