@@ -8,7 +8,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { decodeSection } from '../../tools/view/web/data.js';
-import { METRICS, compiling, computeMetric, featureTable, vertexReference } from '../../tools/view/web/metrics.js';
+import { METRICS, MISSING, compiling, computeMetric, featureTable, vertexReference } from '../../tools/view/web/metrics.js';
 import { Checks, readPly, run } from './support.mjs';
 
 const args = Object.fromEntries(process.argv.slice(2).join(' ').split(/\s*--/).filter(Boolean).map((a) => a.split(' ')));
@@ -69,15 +69,17 @@ try {
       const a = new Float32Array(ply.count), sa = new Float32Array(ply.count);
       const b = new Float32Array(ply.count), sb = new Float32Array(ply.count);
       compiling.allowed = true;
-      computeMetric(table, reference, metric, 3, a, sa, {});
+      const undefinedA = computeMetric(table, reference, metric, 3, a, sa, {});
       compiling.allowed = false;
-      computeMetric(table, reference, metric, 3, b, sb, {});
+      const undefinedB = computeMetric(table, reference, metric, 3, b, sb, {});
       compiling.allowed = true;
+      checks.ok(undefinedA === undefinedB, `${metric} of ${letters}: as many undefined from the kernel as from the loops (${undefinedA}, ${undefinedB})`);
       let same = 0, compared = 0, worst = 0, worstRelative = 0;
       const f = expected[`f_${metric}`];
       const diffs = [];
       for (let i = 0; i < ply.count; i++) {
-        if (Object.is(a[i], b[i]) || a[i] === b[i]) same++;
+        if ((Object.is(a[i], b[i]) || a[i] === b[i]) && sa[i] === sb[i]) same++;
+        checks.ok(Number.isNaN(a[i]) ? sa[i] === Math.fround(MISSING) : sa[i] === a[i], `${metric} of ${letters} at ${i}: the GPU's copy holds f (or MISSING)`);
         if (Number.isNaN(f[i]) || Number.isNaN(a[i])) {
           checks.ok(Number.isNaN(f[i]) === Number.isNaN(a[i]) || Math.abs(f[i]) < 1e-3, `${metric} of ${letters} at ${i}: NaN in both (${a[i]}, ${f[i]})`);
           continue;

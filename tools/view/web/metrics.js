@@ -422,6 +422,16 @@ function kernelSource(t, o, opt, cache) {
   const { dim, step, lo } = t;
   const x = (e, c) => `(${literal(c)} + ${literal(step[e])} * codes[b + ${e}])`; // c + step·code
   const c0 = offsets(t, o);
+  // Where o_e lies on the column's grid (the clicked vertex's own value does; the steps are
+  // powers of two), x_e − o_e is (code − o's code)·step, with the step folded into the
+  // constants that multiply it: the same numbers bit for bit (scaling by a power of two is
+  // exact), two operations fewer per element.
+  const gridCode = (e) => {
+    if (!(step[e] > 0) || !Number.isInteger(Math.log2(step[e])) || !Number.isInteger(lo[e] / step[e])) return null;
+    const k = (o[e] - lo[e]) / step[e];
+    return Number.isInteger(k) && Math.abs(k) < 2 ** 31 ? k : null;
+  };
+  const xo = (e) => (gridCode(e) === null ? x(e, c0[e]) : `(codes[b + ${e}] - ${gridCode(e)}) * ${literal(step[e])}`);
   const lines = [];
   let result;
   if (opt.kind === 'pnorm') {
@@ -429,9 +439,10 @@ function kernelSource(t, o, opt, cache) {
     const p = opt.p;
     lines.push('let s = 0, d;');
     for (let e = 0; e < dim; e++) {
-      const d = x(e, c0[e]), we = literal(w[e]);
+      const d = xo(e), we = literal(w[e]), k = gridCode(e);
       if (p === Infinity) lines.push(`s = Math.max(s, ${we} * Math.abs(${d}));`);
       else if (p === 1) lines.push(`s += ${we} * Math.abs(${d});`);
+      else if (p === 2 && k !== null) lines.push(`d = codes[b + ${e}] - ${k}; s += ${literal(w[e] * step[e] * step[e])} * d * d;`);
       else if (p === 2) lines.push(`d = ${d}; s += ${we} * d * d;`);
       else if (p <= 64 && Math.floor(2 * p) === 2 * p) lines.push(`d = Math.abs(${d}); s += ${we} * ${powerSource('d', p)};`);
       else lines.push(`s += ${we} * Math.fround(Math.fround(Math.abs(${d})) ** ${literal(Math.fround(p))});`);
@@ -447,10 +458,12 @@ function kernelSource(t, o, opt, cache) {
           const e = offset + j - 1;
           const a = bl.letter === 'V' ? 3 * j * j - 3 * j + 1 : 2 * j - 1;
           const ib = 1 / (bl.letter === 'V' ? j * j * j : j * j);
-          lines.push(`d = ${x(e, c0[e])}; t += d * ${literal(ib)}; q += d * ${literal(a)} * t;`);
+          const k = gridCode(e);
+          if (k === null) lines.push(`d = ${x(e, c0[e])}; t += d * ${literal(ib)}; q += d * ${literal(a)} * t;`);
+          else lines.push(`d = codes[b + ${e}] - ${k}; t += d * ${literal(step[e] * ib)}; q += d * ${literal(step[e] * a)} * t;`);
         }
       } else {
-        for (let e = offset; e < offset + bl.count; e++) lines.push(`d = ${x(e, c0[e])}; q += d * d;`);
+        for (let e = offset; e < offset + bl.count; e++) lines.push(`d = ${xo(e)}; q += d * d;`);
       }
       offset += bl.count;
     }
@@ -469,7 +482,7 @@ function kernelSource(t, o, opt, cache) {
     if (!cache.inverseVariances) cache.inverseVariances = inverseVariances(t);
     const inv = cache.inverseVariances;
     lines.push('let s = 0, d;');
-    for (let e = 0; e < dim; e++) if (inv[e] !== 0) lines.push(`d = ${x(e, c0[e])}; s += d * d * ${literal(inv[e])};`);
+    for (let e = 0; e < dim; e++) if (inv[e] !== 0) lines.push(`d = ${xo(e)}; s += d * d * ${literal(inv[e])};`);
     result = 'Math.sqrt(s)';
   } else if (opt.kind === 'correlation') {
     if (o.every((v) => v === o[0])) return null;
@@ -480,7 +493,7 @@ function kernelSource(t, o, opt, cache) {
     let oo = 0;
     for (const v of oc) oo += v * v;
     for (let e = 0; e < dim; e++) lines.push(`const x${e} = ${x(e, lo[e])};`);
-    lines.push(`if (${Array.from({ length: dim - 1 }, (_, e) => `x${e + 1} === x0`).join(' && ') || 'true'}) { out[i] = NaN; continue; }`);
+    lines.push(`if (${Array.from({ length: dim - 1 }, (_, e) => `x${e + 1} === x0`).join(' && ') || 'true'}) { out[i] = NaN; shown[i] = ${literal(MISSING)}; undefinedCount++; continue; }`);
     lines.push(`let sum = 0; ${Array.from({ length: dim }, (_, e) => `sum += x${e};`).join(' ')}`);
     lines.push(`const mx = sum / ${dim}; let xo = 0, xx = 0, c;`);
     for (let e = 0; e < dim; e++) lines.push(`c = x${e} - mx; xo += c * ${literal(oc[e])}; xx += c * c;`);
@@ -495,8 +508,8 @@ function kernelSource(t, o, opt, cache) {
     if (!spans.length) return null;
     lines.push('let sumR = 0, sum, mean, prev, cur, num, den;');
     for (const [begin, end] of spans) {
-      for (let j = begin; j < end; j++) lines.push(`const d${j} = ${x(j, c0[j])};`);
-      lines.push(`if (${Array.from({ length: end - begin - 1 }, (_, k) => `d${begin + k + 1} === d${begin}`).join(' && ')}) { out[i] = NaN; continue; }`);
+      for (let j = begin; j < end; j++) lines.push(`const d${j} = ${xo(j)};`);
+      lines.push(`if (${Array.from({ length: end - begin - 1 }, (_, k) => `d${begin + k + 1} === d${begin}`).join(' && ')}) { out[i] = NaN; shown[i] = ${literal(MISSING)}; undefinedCount++; continue; }`);
       lines.push(`sum = 0; ${Array.from({ length: end - begin }, (_, k) => `sum += d${begin + k};`).join(' ')}`);
       lines.push(`mean = sum / ${end - begin}; prev = d${begin} - mean; num = 0; den = prev * prev;`);
       for (let j = begin + 1; j < end; j++) lines.push(`cur = d${j} - mean; num += prev * cur; den += cur * cur; prev = cur;`);

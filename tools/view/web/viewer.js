@@ -1033,18 +1033,19 @@ function clearSelection() {
   requestRender();
 }
 
+/** The vertex (or cell) under the page's point (clientX, clientY), or null. */
+function itemAt(clientX, clientY) {
+  const rect = canvas.getBoundingClientRect();
+  const x = clientX - rect.left, y = clientY - rect.top;
+  if (view.header.kind !== 'mesh') return cellAt(x, y);
+  const ratio = renderer.domElement.width / canvas.clientWidth;
+  const p = surfacePointAt(Math.floor(x * ratio), Math.floor(y * ratio));
+  return p ? nearestVertex(p) : null;
+}
+
 async function onClick(event) {
   const t0 = performance.now();
-  const rect = canvas.getBoundingClientRect();
-  const x = event.clientX - rect.left, y = event.clientY - rect.top;
-  let i = null;
-  if (view.header.kind === 'mesh') {
-    const ratio = renderer.domElement.width / canvas.clientWidth;
-    const p = surfacePointAt(Math.floor(x * ratio), Math.floor(y * ratio));
-    if (p) i = nearestVertex(p);
-  } else {
-    i = cellAt(x, y);
-  }
+  const i = itemAt(event.clientX, event.clientY);
   const pickMs = performance.now() - t0;
   if (i === null) return;
   await select(i, { timed: true, t0, pickMs });
@@ -1281,6 +1282,7 @@ window.msiiView = {
   get header() { return view.header; },
   state: () => JSON.parse(JSON.stringify(state)),
   screenOf,
+  itemAt,
   featureVector: featureVectorOf,
   distance: () => (view.distance ? Array.from(view.distance) : null),
   distanceAt: (i) => (view.distance ? view.distance[i] : null),
