@@ -286,6 +286,7 @@ const std::vector<std::string>& viewAssetFiles()
         "viewer.css",
         "data.js",
         "metrics.js",
+        "metrics-worker.js",
         "plot.js",
         "three/three.module.js",
         "three/three.core.js",
@@ -361,6 +362,14 @@ ViewFolderResult writeViewFolder(const ViewInput& input, const std::string& fold
         if (isFeatureColumn(input.columns[k].name))
             result.largestError = std::max(result.largestError, columns[k]["max_error"].get<double>());
     header["columns"] = columns;
+    // The column the page shows first (quality, else the first) right after the geometry:
+    // the page draws as soon as those bytes have arrived, while the rest still streams in.
+    const auto shownFirst = std::find_if(input.columns.begin(), input.columns.end(),
+                                         [](const ViewColumn& c) { return c.name == "quality"; });
+    if (shownFirst != input.columns.end())
+        std::rotate(sections.begin() + std::ptrdiff_t(firstColumn),
+                    sections.begin() + std::ptrdiff_t(firstColumn) + (shownFirst - input.columns.begin()),
+                    sections.begin() + std::ptrdiff_t(firstColumn) + (shownFirst - input.columns.begin()) + 1);
     std::uint64_t offset = 0;
     for (const Section& s : sections) {
         header["sections"][s.name] = {{"offset", offset},     {"bytes", s.bytes.size()},     {"type", s.type},

@@ -11,21 +11,57 @@ const TYPES = {
   int8: Int8Array,
 };
 
-/** Fetches the header and the binary file of the folder at `base`. */
+/**
+ * Fetches the header and starts on the binary file of the folder at `base`. data.bin is
+ * read as it arrives: `arrived(end)` resolves once its first `end` bytes are in, so that
+ * the page decodes (and draws) the geometry while the columns still stream in; `complete`
+ * resolves when all of it is.
+ */
 export async function fetchView(base) {
   const get = async (name) => {
     const response = await fetch(new URL(name, base));
     if (!response.ok) throw new Error(`${name}: HTTP ${response.status}`);
     return response;
   };
-  const [header, bin] = await Promise.all([
-    get('data.json').then((r) => r.json()),
-    get('data.bin').then((r) => r.arrayBuffer()),
-  ]);
+  const [header, response] = await Promise.all([get('data.json').then((r) => r.json()), get('data.bin')]);
   if (!String(header.format).startsWith('msii-view 1')) {
     throw new Error(`data.json is not a view of msii 1 (format ${header.format})`);
   }
-  return { header, bin };
+  const total = Object.values(header.sections).reduce((m, sec) => Math.max(m, sec.offset + sec.bytes), 0);
+  const bin = new ArrayBuffer(total);
+  const bytes = new Uint8Array(bin);
+  let received = 0;
+  let failed = null;
+  const waiting = [];
+  const wake = () => {
+    for (let k = waiting.length - 1; k >= 0; k--) {
+      const w = waiting[k];
+      if (failed) w.reject(failed);
+      else if (w.end <= received) w.resolve();
+      else continue;
+      waiting.splice(k, 1);
+    }
+  };
+  const complete = (async () => {
+    const reader = response.body.getReader();
+    for (;;) {
+      const { done, value } = await reader.read();
+      if (done) break;
+      if (received + value.length > total) throw new Error(`data.bin is longer than data.json says (${total} bytes)`);
+      bytes.set(value, received);
+      received += value.length;
+      wake();
+    }
+    if (received !== total) throw new Error(`data.bin has ${received} bytes, data.json says ${total}`);
+  })().catch((e) => {
+    failed = e;
+    wake();
+    throw e;
+  });
+  complete.catch(() => {}); // reported by whoever waits for the bytes
+  const arrived = (end) => (end <= received ? Promise.resolve()
+    : failed ? Promise.reject(failed) : new Promise((resolve, reject) => waiting.push({ end, resolve, reject })));
+  return { header, bin, arrived, complete };
 }
 
 /** The zlib stream `bytes` inflated, by the browser's own zlib. */
@@ -37,10 +73,12 @@ async function inflate(bytes) {
 /**
  * The typed array of section `name` of `header.sections`, decoded: inflated, its byte
  * planes put back together, and its differences summed where the writer took them.
+ * `arrived` (fetchView's) waits for the section's bytes; without it `bin` must be whole.
  */
-export async function decodeSection(header, bin, name) {
+export async function decodeSection(header, bin, name, arrived = null) {
   const s = header.sections[name];
   if (!s) throw new Error(`data.json lists no section '${name}'`);
+  if (arrived) await arrived(s.offset + s.bytes);
   const Type = TYPES[s.type];
   const size = Type.BYTES_PER_ELEMENT;
   const raw = await inflate(new Uint8Array(bin, s.offset, s.bytes));

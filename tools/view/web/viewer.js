@@ -6,12 +6,12 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { MapControls } from 'three/addons/controls/MapControls.js';
 import { fetchView, decodeSection, NAN_CODE } from './data.js';
-import { METRICS, MISSING, isSimilarity, featureTable, computeMetric, rowOf, vertexReference } from './metrics.js';
+import { METRICS, MISSING, isSimilarity, featureTable, computeMetric, inverseVariances, metricOptions, rowOf, vertexReference } from './metrics.js';
 import { drawFeatureCurves, formatNumber, niceTicks } from './plot.js';
 
 /** What the page measured, in milliseconds (performance.now(): from the start of loading the page). */
 const timings = {
-  fetched: null,        // data.json and data.bin fetched
+  fetched: null,        // data.bin fetched whole (the first frame does not wait for it)
   decoded: null,        // the mesh (or the map) and the first column decoded
   firstFrame: null,     // the first frame drawn and finished
   allColumns: null,     // every feature column decoded
@@ -110,6 +110,7 @@ const view = {
   distanceUpload: null, // the same with NaN as MISSING, for the GPU
   distanceRange: null,
   distanceVersion: 0,   // counts the distances computed, so the GPU's copy is refreshed once each
+  generation: 0,        // counts the computations begun: an answer to an older one is dropped
 };
 
 function loadColumn(name) {
@@ -117,7 +118,7 @@ function loadColumn(name) {
   if (!view.pending.has(name)) {
     const info = view.header.columns.find((c) => c.name === name);
     if (!info) return Promise.reject(new Error(`there is no column '${name}'`));
-    view.pending.set(name, decodeSection(view.header, view.bin, info.section).then((q) => {
+    view.pending.set(name, decodeSection(view.header, view.bin, info.section, view.arrived).then((q) => {
       const column = { q, lo: info.lo, step: info.step, info };
       view.columns.set(name, column);
       return column;
@@ -467,9 +468,9 @@ function resize() {
 async function buildMesh() {
   const h = view.header;
   const [positions, normals, indices] = await Promise.all([
-    decodeSection(h, view.bin, 'positions'),
-    decodeSection(h, view.bin, 'normals'),
-    decodeSection(h, view.bin, 'indices'),
+    decodeSection(h, view.bin, 'positions', view.arrived),
+    decodeSection(h, view.bin, 'normals', view.arrived),
+    decodeSection(h, view.bin, 'indices', view.arrived),
   ]);
   view.positions = positions;
   const geometry = new THREE.BufferGeometry();
@@ -501,7 +502,7 @@ async function buildMap() {
   const r = view.header.raster;
   let heights = null;
   if (r.heights) {
-    const z = await decodeSection(view.header, view.bin, 'heights');
+    const z = await decodeSection(view.header, view.bin, 'heights', view.arrived);
     for (let i = 0; i < z.length; i++) if (Number.isNaN(z[i])) z[i] = -1e30;
     heights = new THREE.DataTexture(z, r.width, r.height, THREE.RedFormat, THREE.FloatType);
     heights.minFilter = heights.magFilter = THREE.NearestFilter;
@@ -890,9 +891,73 @@ async function tableOf(letters) {
     await Promise.all(needed.map(loadColumn));
     const table = featureTable(letters, view.columns, view.n);
     view.tables.clear();
-    view.tables.set(letters, { table, cache: {} });
+    view.tables.set(letters, { table, cache: {}, parts: splitTable(table) });
   }
   return view.tables.get(letters);
+}
+
+// The metric of a click runs on every core: the page takes the first rows of the table,
+// each worker (metrics-worker.js) the rows after; a worker keeps its rows for the clicks
+// that follow. Without workers (an old browser) the page takes them all.
+const workers = [];
+
+function startWorkers() {
+  const count = Math.min(3, (navigator.hardwareConcurrency || 2) - 1);
+  try {
+    for (let k = 0; k < count; k++) {
+      const w = new Worker(new URL('./metrics-worker.js', import.meta.url), { type: 'module' });
+      w.waiting = []; // the runs asked of it, answered in order
+      w.onmessage = ({ data }) => w.waiting.shift()(data);
+      w.onerror = (e) => w.waiting.shift()?.({ error: e.message || 'the worker failed' });
+      workers.push(w);
+    }
+  } catch {
+    workers.length = 0;
+  }
+}
+
+/** The rows [begin, end) of each part: the page's first, then one per worker. */
+function splitTable(table) {
+  const size = Math.ceil(table.n / (workers.length + 1));
+  const parts = [];
+  for (let k = 0; k <= workers.length; k++) {
+    const begin = Math.min(table.n, k * size), end = Math.min(table.n, (k + 1) * size);
+    const rows = {
+      n: end - begin, dim: table.dim, blocks: table.blocks, letters: table.letters, lo: table.lo, step: table.step,
+      codes: table.codes.subarray(begin * table.dim, end * table.dim), nan: table.nan.subarray(begin, end),
+    };
+    if (k > 0) {
+      const copy = { ...rows, codes: rows.codes.slice(), nan: rows.nan.slice() };
+      workers[k - 1].postMessage({ table: copy }, [copy.codes.buffer, copy.nan.buffer]);
+    }
+    parts.push({ begin, end, rows });
+  }
+  return parts;
+}
+
+/** f of every vertex into `out` (and the GPU's copy `shown`), the parts at once; how many are NaN (null: superseded). */
+async function runMetric(entry, reference, out, shown, generation) {
+  const { table, cache, parts } = entry;
+  if (metricOptions(state.metric, state.p).kind === 'neuclid' && !cache.inverseVariances) {
+    cache.inverseVariances = inverseVariances(table); // of all vertices, for every part
+  }
+  const ask = { reference, name: state.metric, p: state.p, inverseVariances: cache.inverseVariances };
+  const answers = workers.map((w) => new Promise((resolve) => {
+    w.waiting.push(resolve);
+    w.postMessage(ask);
+  }));
+  const first = parts[0];
+  let undefinedCount = computeMetric(first.rows, reference, state.metric, state.p,
+    out.subarray(first.begin, first.end), shown.subarray(first.begin, first.end), cache);
+  const results = await Promise.all(answers);
+  if (generation !== view.generation) return null; // another click came meanwhile
+  results.forEach((r, k) => {
+    if (r.error) throw new Error(r.error);
+    out.set(r.out, parts[k + 1].begin);
+    shown.set(r.shown, parts[k + 1].begin);
+    undefinedCount += r.undefinedCount;
+  });
+  return undefinedCount;
 }
 
 function featureVectorOf(i) {
@@ -962,16 +1027,19 @@ function samplePercentiles(f, ps) {
 async function computeDistances() {
   const note = $('metric-note');
   note.classList.remove('error');
+  const generation = ++view.generation;
   try {
-    const { table, cache } = await tableOf(state.inv);
+    const entry = await tableOf(state.inv);
+    const { table } = entry;
     const reference = vertexReference(table, state.sel);
     if (!view.distance) {
       view.distance = new Float32Array(view.n);
       view.distanceUpload = new Float32Array(view.n);
     }
     const tk = performance.now();
-    const undefinedCount = computeMetric(table, reference, state.metric, state.p, view.distance, view.distanceUpload, cache);
+    const undefinedCount = await runMetric(entry, reference, view.distance, view.distanceUpload, generation);
     view.kernelMs = performance.now() - tk;
+    if (undefinedCount === null || generation !== view.generation) return 'superseded';
     const f = view.distance;
     view.distanceVersion = (view.distanceVersion || 0) + 1;
     const sim = isSimilarity(state.metric);
@@ -993,6 +1061,7 @@ async function computeDistances() {
       (undefinedCount ? `; ${undefinedCount} undefined (NaN), grey` : '');
     return true;
   } catch (e) {
+    if (generation !== view.generation) return 'superseded';
     view.distance = null;
     note.textContent = e.message;
     note.classList.add('error');
@@ -1006,6 +1075,7 @@ async function select(i, { timed = false, t0 = performance.now(), pickMs = 0 } =
   describeSelection(i);
   const tm = performance.now();
   const ok = await computeDistances();
+  if (ok === 'superseded') return;
   const metricMs = performance.now() - tm;
   if (ok) state.show = 'distance';
   else if (state.show === 'distance') state.show = defaultColumn();
@@ -1021,6 +1091,7 @@ async function select(i, { timed = false, t0 = performance.now(), pickMs = 0 } =
 }
 
 function clearSelection() {
+  view.generation++; // a computation under way is for nothing now
   state.sel = null;
   placeMarker(null);
   state.thr = null;
@@ -1211,10 +1282,11 @@ async function main() {
     throw new Error('this browser cannot inflate the data (DecompressionStream: Chrome 80, Firefox 113, Safari 16.4 and later)');
   }
   makeRenderer();
-  const { header, bin } = await fetchView(new URL('.', location.href));
-  timings.fetched = performance.now();
+  const { header, bin, arrived, complete } = await fetchView(new URL('.', location.href));
+  complete.then(() => { timings.fetched = performance.now(); }, () => {});
   view.header = header;
   view.bin = bin;
+  view.arrived = arrived;
   view.n = header.items;
   for (const [name, hex] of Object.entries(header.colormaps)) colormaps[name] = colormapTexture(hex);
   indexColumns();
@@ -1264,6 +1336,7 @@ async function main() {
   }
   timings.allColumns = performance.now();
   view.bin = null; // every section is decoded
+  startWorkers();
   await tableOf(state.inv); // the feature table of the first click, made while nobody waits
   setStatus('');
   await applyState(initial);
