@@ -473,6 +473,8 @@ async function buildMesh() {
     decodeSection(h, view.bin, 'indices', view.arrived),
   ]);
   view.positions = positions;
+  view.inFace = new Uint8Array(view.n);
+  for (let k = 0; k < indices.length; k++) view.inFace[indices[k]] = 1;
   const geometry = new THREE.BufferGeometry();
   geometry.setAttribute('position', new THREE.BufferAttribute(positions, 3));
   geometry.setAttribute('normal', new THREE.BufferAttribute(normals, 3, true));
@@ -846,9 +848,10 @@ function surfacePointAt(x, y) {
 
 /** The vertex nearest to p (a scan of all of them: a few ms for a million, and no index to build). */
 function nearestVertex(p) {
-  const pos = view.positions;
+  const pos = view.positions, inFace = view.inFace;
   let best = -1, bestD = Infinity;
   for (let i = 0, k = 0; i < view.n; i++, k += 3) {
+    if (!inFace[i]) continue; // not drawn (and without values): not what was clicked
     const dx = pos[k] - p[0], dy = pos[k + 1] - p[1], dz = pos[k + 2] - p[2];
     const d = dx * dx + dy * dy + dz * dz;
     if (d < bestD) {
