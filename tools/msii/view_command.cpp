@@ -196,7 +196,7 @@ void serve(const fs::path& folder, const ViewCommandArgs& args)
 std::string megabytes(std::uint64_t bytes)
 {
     char text[32];
-    std::snprintf(text, sizeof text, "%.1f MB", double(bytes) / 1e6);
+    std::snprintf(text, sizeof text, "%.3g MB", double(bytes) / 1e6);
     return text;
 }
 
@@ -250,16 +250,12 @@ int runView(const ViewCommandArgs& args)
     }
     if (gStop) dieBySignal();
     if (!args.quiet) {
-        std::error_code ec;
-        const std::uintmax_t inputBytes = fs::file_size(input, ec);
         const std::size_t items = view.mesh ? view.mesh->positions.size() / 3
                                             : std::size_t(view.raster->width) * std::size_t(view.raster->height);
-        char share[48] = "";
-        if (!ec && inputBytes > 0)
-            std::snprintf(share, sizeof share, ", %.0f %% of the input", 100.0 * double(written.folderBytes) / double(inputBytes));
-        std::fprintf(stderr, "msii: %s -> %s (%zu %s, %zu columns, %s%s; feature values within %.2g; %.1f s)\n",
+        std::fprintf(stderr, "msii: %s -> %s (%zu %s, %zu columns, %s with data.bin %s; feature values within %.2g; %.1f s)\n",
                      args.input.c_str(), folder.string().c_str(), items, view.mesh ? "vertices" : "cells",
-                     written.columns, megabytes(written.folderBytes).c_str(), share, written.largestError, total.seconds());
+                     written.columns, megabytes(written.folderBytes).c_str(), megabytes(written.dataBytes).c_str(),
+                     written.largestError, total.seconds());
     }
     if (!args.noServe) serve(folder, args);
     return 0;

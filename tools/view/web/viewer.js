@@ -1340,7 +1340,9 @@ async function main() {
   timings.allColumns = performance.now();
   view.bin = null; // every section is decoded
   startWorkers();
-  await tableOf(state.inv); // the feature table of the first click, made while nobody waits
+  // The feature table of the first click, made while nobody waits; where it cannot be made
+  // (a DEM's default bands hold V at some radii only) a click says why.
+  await tableOf(state.inv).catch(() => {});
   setStatus('');
   await applyState(initial);
 }
