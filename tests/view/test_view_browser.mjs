@@ -360,6 +360,24 @@ async function testDem(browser) {
   } finally {
     await server.stop();
   }
+
+  // The default bands (V at R/4, R/2, 3R/4 and R) open too; a click says, as msii metric
+  // does, that the metrics need every radius.
+  run(msii, ['compute', dem, '-r', '4', '-q', '--raster-output', path.join(work, 'default.msii.tif')]);
+  const other = await startView(msii, [path.join(work, 'default.msii.tif'), '-q']);
+  try {
+    const page = await openPage(browser, other.url);
+    const at = await page.evaluate((i) => window.msiiView.screenOf(i), 30 * 80 + 40);
+    await page.mouse.click(at.x, at.y);
+    await page.waitForFunction(() => window.msiiView.state().sel !== null && document.getElementById('metric-note').textContent !== '');
+    const note = await page.evaluate(() => document.getElementById('metric-note').textContent);
+    checks.ok(/some radii only \(V_02, V_04, V_06, V_08\)/.test(note), `the default bands: a click explains the metrics (${note})`);
+    checks.ok(page.errors.length === 0, `no errors on the page of the default bands (${page.errors.join('; ')})`);
+    checks.note('DEM: the default bands open, and a click says the metrics need every radius');
+    await page.close();
+  } finally {
+    await other.stop();
+  }
 }
 
 const browser = await launchBrowser(args.browser || 'chromium', args.browser === 'firefox' ? args.firefox : args.chromium);
