@@ -726,11 +726,7 @@ function itemWord() {
 function fillMenus() {
   const show = $('show');
   show.textContent = '';
-  for (const [letter, list] of Object.entries(view.features)) {
-    const o = new Option(`${LETTERS[letter].symbol} (${LETTERS[letter].name})`, letter);
-    show.append(o);
-    void list;
-  }
+  for (const letter of Object.keys(view.features)) show.append(new Option(`${LETTERS[letter].symbol} (${LETTERS[letter].name})`, letter));
   for (const name of view.others) show.append(new Option(name, name));
   show.append(new Option('distance to the selected ' + itemWord(), 'distance'));
   const metric = $('metric');
