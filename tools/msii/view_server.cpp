@@ -98,6 +98,9 @@ void serveFolder(const std::string& folder, const ServeOptions& options)
 {
     const fs::path root = fs::canonical(folder);
     httplib::Server server;
+    // The page stops reading data.bin while it draws its first frame (seconds, with
+    // software WebGL): the library's 5 s for a blocked write would cut it off.
+    server.set_write_timeout(300, 0);
     int port = options.port;
     server.set_pre_routing_handler([&port](const httplib::Request& req, httplib::Response& res) {
         if (req.method != "GET" && req.method != "HEAD") {
