@@ -331,7 +331,9 @@ ViewFolderResult writeViewFolder(const ViewInput& input, const std::string& fold
         const ViewMesh& m = *input.mesh;
         sections.push_back(makeSection("positions", "float32", m.positions, {true, false, options.level}));
         sections.push_back(makeSection("normals", "int8", m.normals, {false, false, options.level}));
-        sections.push_back(makeSection("indices", "uint32", m.triangles, {true, true, options.level}));
+        // Differences alone: nearly as small as with byte planes (0.38 MB against 0.30 for
+        // the 1.1M-vertex tablet), and quicker for the page to undo before its first frame.
+        sections.push_back(makeSection("indices", "uint32", m.triangles, {false, true, options.level}));
     } else if (!input.raster->heights.empty()) {
         sections.push_back(makeSection("heights", "float32", input.raster->heights, {true, false, options.level}));
     }

@@ -85,18 +85,22 @@ export async function decodeSection(header, bin, name, arrived = null) {
   if (raw.length !== s.count * size) {
     throw new Error(`section ${name}: ${raw.length} bytes, expected ${s.count * size}`);
   }
-  let bytes = raw;
+  let values;
   if (s.planes && size > 1) {
     // Plane b holds byte b of every element: deflate finds the slowly varying high bytes
-    // of neighbouring values far more alike than interleaved ones.
-    bytes = new Uint8Array(raw.length);
+    // of neighbouring values far more alike than interleaved ones. Each element is put
+    // together from its bytes at once (little-endian, as typed arrays are here).
     const n = s.count;
-    for (let b = 0; b < size; b++) {
-      const plane = raw.subarray(b * n, (b + 1) * n);
-      for (let i = 0, j = b; i < n; i++, j += size) bytes[j] = plane[i];
+    const words = size === 2 ? new Uint16Array(n) : new Uint32Array(n);
+    if (size === 2) {
+      for (let i = 0; i < n; i++) words[i] = raw[i] | (raw[n + i] << 8);
+    } else {
+      for (let i = 0; i < n; i++) words[i] = raw[i] | (raw[n + i] << 8) | (raw[2 * n + i] << 16) | (raw[3 * n + i] << 24);
     }
+    values = new Type(words.buffer);
+  } else {
+    values = new Type(raw.buffer, raw.byteOffset, s.count);
   }
-  const values = new Type(bytes.buffer, bytes.byteOffset, s.count);
   if (s.delta) {
     // Each element was stored as its difference to the previous one, modulo the type's
     // range; the typed array wraps the sums the same way.
