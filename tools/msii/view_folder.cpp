@@ -286,7 +286,6 @@ const std::vector<std::string>& viewAssetFiles()
         "viewer.css",
         "data.js",
         "metrics.js",
-        "metrics-worker.js",
         "plot.js",
         "three/three.module.js",
         "three/three.core.js",

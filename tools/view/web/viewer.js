@@ -6,7 +6,7 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { MapControls } from 'three/addons/controls/MapControls.js';
 import { fetchView, decodeSection, NAN_CODE } from './data.js';
-import { METRICS, MISSING, isSimilarity, featureTable, computeMetric, inverseVariances, metricOptions, rowOf, vertexReference } from './metrics.js';
+import { METRICS, MISSING, isSimilarity, featureTable, computeMetric, rowOf, vertexReference } from './metrics.js';
 import { drawFeatureCurves, formatNumber, niceTicks } from './plot.js';
 
 /** What the page measured, in milliseconds (performance.now(): from the start of loading the page). */
@@ -890,73 +890,9 @@ async function tableOf(letters) {
     await Promise.all(needed.map(loadColumn));
     const table = featureTable(letters, view.columns, view.n);
     view.tables.clear();
-    view.tables.set(letters, { table, cache: {}, parts: splitTable(table) });
+    view.tables.set(letters, { table, cache: {} });
   }
   return view.tables.get(letters);
-}
-
-// The metric of a click runs on every core: the page takes the first rows of the table,
-// each worker (metrics-worker.js) the rows after; a worker keeps its rows for the clicks
-// that follow. Without workers (an old browser) the page takes them all.
-const workers = [];
-
-function startWorkers() {
-  const count = Math.min(3, (navigator.hardwareConcurrency || 2) - 1);
-  try {
-    for (let k = 0; k < count; k++) {
-      const w = new Worker(new URL('./metrics-worker.js', import.meta.url), { type: 'module' });
-      w.waiting = []; // the runs asked of it, answered in order
-      w.onmessage = ({ data }) => w.waiting.shift()(data);
-      w.onerror = (e) => w.waiting.shift()?.({ error: e.message || 'the worker failed' });
-      workers.push(w);
-    }
-  } catch {
-    workers.length = 0;
-  }
-}
-
-/** The rows [begin, end) of each part: the page's first, then one per worker. */
-function splitTable(table) {
-  const size = Math.ceil(table.n / (workers.length + 1));
-  const parts = [];
-  for (let k = 0; k <= workers.length; k++) {
-    const begin = Math.min(table.n, k * size), end = Math.min(table.n, (k + 1) * size);
-    const rows = {
-      n: end - begin, dim: table.dim, blocks: table.blocks, letters: table.letters, lo: table.lo, step: table.step,
-      codes: table.codes.subarray(begin * table.dim, end * table.dim), nan: table.nan.subarray(begin, end),
-    };
-    if (k > 0) {
-      const copy = { ...rows, codes: rows.codes.slice(), nan: rows.nan.slice() };
-      workers[k - 1].postMessage({ table: copy }, [copy.codes.buffer, copy.nan.buffer]);
-    }
-    parts.push({ begin, end, rows });
-  }
-  return parts;
-}
-
-/** f of every vertex into `out` (and the GPU's copy `shown`), the parts at once; how many are NaN (null: superseded). */
-async function runMetric(entry, reference, out, shown, generation) {
-  const { table, cache, parts } = entry;
-  if (metricOptions(state.metric, state.p).kind === 'neuclid' && !cache.inverseVariances) {
-    cache.inverseVariances = inverseVariances(table); // of all vertices, for every part
-  }
-  const ask = { reference, name: state.metric, p: state.p, inverseVariances: cache.inverseVariances };
-  const answers = workers.map((w) => new Promise((resolve) => {
-    w.waiting.push(resolve);
-    w.postMessage(ask);
-  }));
-  const first = parts[0];
-  let undefinedCount = computeMetric(first.rows, reference, state.metric, state.p,
-    out.subarray(first.begin, first.end), shown.subarray(first.begin, first.end), cache);
-  const results = await Promise.all(answers);
-  if (generation !== view.generation) return null; // another click came meanwhile
-  results.forEach((r, k) => {
-    if (r.error) throw new Error(r.error);
-    out.set(r.out, parts[k + 1].begin);
-    shown.set(r.shown, parts[k + 1].begin);
-    undefinedCount += r.undefinedCount;
-  });
-  return undefinedCount;
 }
 
 function featureVectorOf(i) {
@@ -1035,10 +971,10 @@ async function computeDistances() {
       view.distance = new Float32Array(view.n);
       view.distanceUpload = new Float32Array(view.n);
     }
+    if (generation !== view.generation) return 'superseded'; // another click came while the table was made
     const tk = performance.now();
-    const undefinedCount = await runMetric(entry, reference, view.distance, view.distanceUpload, generation);
+    const undefinedCount = computeMetric(table, reference, state.metric, state.p, view.distance, view.distanceUpload, entry.cache);
     view.kernelMs = performance.now() - tk;
-    if (undefinedCount === null || generation !== view.generation) return 'superseded';
     const f = view.distance;
     view.distanceVersion = (view.distanceVersion || 0) + 1;
     const sim = isSimilarity(state.metric);
@@ -1335,7 +1271,6 @@ async function main() {
   }
   timings.allColumns = performance.now();
   view.bin = null; // every section is decoded
-  startWorkers();
   // The feature table of the first click, made while nobody waits; where it cannot be made
   // (a DEM's default bands hold V at some radii only) a click says why.
   await tableOf(state.inv).catch(() => {});
