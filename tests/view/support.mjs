@@ -4,7 +4,7 @@ import { spawn, execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import zlib from 'node:zlib';
-import { chromium } from 'playwright-core';
+import { chromium, firefox } from 'playwright-core';
 
 /** The flags of headless Chromium with software WebGL (SwiftShader), no network of its own. */
 export const CHROMIUM_FLAGS = [
@@ -14,55 +14,21 @@ export const CHROMIUM_FLAGS = [
 ];
 
 /**
- * Launches Debian's chromium (`executable`, default /usr/bin/chromium; playwright gives it
- * a fresh profile folder), or with `name` "firefox" Debian's firefox-esr (launchFirefox).
+ * Launches Debian's chromium (`executable`, default /usr/bin/chromium), or with `name`
+ * "firefox" Debian's firefox-esr through WebDriver BiDi (playwright's moz-firefox
+ * channel, for a stock Firefox). Firefox draws WebGL with Mesa only on a display, so it
+ * runs in a window: under `xvfb-run -a` on a machine without one. Playwright gives either
+ * browser a fresh profile folder.
  */
 export async function launchBrowser(name = 'chromium', executable = null) {
-  if (name === 'firefox') return launchFirefox(executable || '/usr/bin/firefox-esr');
-  return chromium.launch({ executablePath: executable || '/usr/bin/chromium', headless: true, args: CHROMIUM_FLAGS });
-}
-
-/**
- * Firefox ESR through puppeteer-core (WebDriver BiDi; playwright-core asks it for commands
- * that ESR 153 lacks), wrapped in the part of playwright's API that the tests use. Not a
- * dependency of the project: `npm install --no-save puppeteer-core`. Firefox draws WebGL
- * with Mesa only on a display: run it under `xvfb-run -a`.
- */
-async function launchFirefox(executable) {
-  let puppeteer;
-  try {
-    ({ default: puppeteer } = await import('puppeteer-core'));
-  } catch {
-    throw new Error('--browser firefox needs puppeteer-core: npm install --no-save puppeteer-core');
+  if (name === 'firefox') {
+    if (!process.env.DISPLAY) throw new Error('--browser firefox needs a display for WebGL: run it under xvfb-run -a');
+    return firefox.launch({
+      channel: 'moz-firefox', executablePath: executable || '/usr/bin/firefox-esr', headless: false,
+      firefoxUserPrefs: { 'webgl.force-enabled': true }, // software GL is off by default
+    });
   }
-  if (!process.env.DISPLAY) throw new Error('--browser firefox needs a display for WebGL: run it under xvfb-run -a');
-  const browser = await puppeteer.launch({
-    browser: 'firefox', executablePath: executable, headless: false,
-    extraPrefsFirefox: { 'webgl.force-enabled': true }, // software GL is off by default
-  });
-  const wrap = (p) => ({
-    goto: (u) => p.goto(u),
-    evaluate: (fn, arg) => p.evaluate(fn, arg),
-    screenshot: async () => Buffer.from(await p.screenshot()),
-    mouse: p.mouse,
-    waitForFunction: (fn, arg, options = {}) => p.waitForFunction(fn, { timeout: options.timeout || 60000, polling: 50 }, arg),
-    $$eval: (selector, fn) => p.$$eval(selector, fn),
-    selectOption: (selector, value) => p.select(selector, value),
-    check: async (selector) => { if (!(await p.$eval(selector, (e) => e.checked))) await p.click(selector); },
-    click: (selector) => p.click(selector),
-    url: () => p.url(),
-    waitForTimeout: (ms) => new Promise((r) => setTimeout(r, ms)),
-    close: () => p.close(),
-    on: (event, f) => p.on(event, f),
-  });
-  return {
-    newPage: async ({ viewport }) => {
-      const p = await browser.newPage();
-      await p.setViewport(viewport);
-      return wrap(p);
-    },
-    close: () => browser.close(),
-  };
+  return chromium.launch({ executablePath: executable || '/usr/bin/chromium', headless: true, args: CHROMIUM_FLAGS });
 }
 
 /** Runs a program to its end; throws with its stderr if it fails. */
