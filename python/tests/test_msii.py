@@ -78,6 +78,24 @@ def test_compute_equals_the_cli_bit_for_bit(tablet, tmp_path):
     assert np.array_equal(masked.V[whole], r.V[whole])  # balls clear of the border: the same, bit for bit
     with pytest.raises(msii.InvalidInputError, match="continue"):
         msii.compute(vertices, faces, 0.8, border="clip")
+
+
+def test_pl_check_is_the_cli_option(tablet, tmp_path):
+    # pl_check=False is msii compute --pl-check off, bit for bit; the default evaluates some
+    # values exactly (the tablet's wedges), which it says.
+    out = tmp_path / "scan.msii.ply"
+    subprocess.run([MSII, "compute", str(tablet), "-r", "0.8", "-q", "--pl-check", "off", "-o", str(out)], check=True)
+    cli = read_ply(out)
+    vertices, faces = msii.read_mesh(str(tablet))
+    off = msii.compute(vertices, faces, 0.8, invariants="PL", pl_check=False)
+    on = msii.compute(vertices, faces, 0.8, invariants="PL")
+    assert not off.pl_check and off.pl_exact_share == 0
+    assert on.pl_check and 0 < on.pl_exact_share < 1
+    for letter in "PL":
+        for j in range(16):
+            column = cli["%s_%02d" % (letter, j + 1)]
+            assert np.array_equal(getattr(off, letter)[:, j], column, equal_nan=True), "%s_%02d" % (letter, j + 1)
+    assert (on.P != off.P).any() and (on.L != off.L).any()
     assert r.voxel_size > 0 and len(r.levels) == 16
 
 

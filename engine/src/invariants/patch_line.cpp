@@ -49,9 +49,10 @@ namespace {
 /// there (docs/accuracy.md): below, a ball holds too few triangles for the values to mean
 /// much, and the kernels' blur is most of their width.
 constexpr double kCheckFromEdges = 3;
-/// Where P̂ and L̂ are fitted from the samples, the fit's RMS residual times this adds to the
-/// check: the fit blurs a crease or an onset within its window as the kernels do, for the
-/// kernels of both widths alike (docs/method.md, The check).
+/// Where P̂ and L̂ are fitted from the samples, a vertex whose fit's RMS residual times this
+/// exceeds the check's thresholds is evaluated where it is: the fit blurs a crease or an
+/// onset within its window for the kernels of both widths alike, where the check cannot see
+/// it (docs/method.md, Exact where the kernels blur).
 constexpr double kFitResidualWeight = 2;
 
 /// @throw InvalidInputError for invalid radii, sample cell size or precision.
@@ -151,13 +152,8 @@ struct LevelStore {
         if (options.computePatch) result.patch[j][i] = p;
         if (options.computeLine) result.line[j][i] = l;
         if (flagged.empty()) return;
-        // The check (docs/method.md, Exact where the kernels blur): the kernels of two widths
-        // and, where the values are fitted from the samples, the fit's residual.
-        float dp = sums.checkPatch[at], dl = sums.checkLine[at];
-        if (!sums.patchResidual.empty()) {
-            dp = std::max(dp, float(kFitResidualWeight) * patch(j, sums.patchResidual[at]));
-            dl = std::max(dl, float(kFitResidualWeight) * line(j, sums.lineResidual[at]));
-        }
+        // The check (docs/method.md, Exact where the kernels blur): the kernels of two widths.
+        const float dp = sums.checkPatch[at], dl = sums.checkLine[at];
         if (options.keepCheck) {
             if (options.computePatch) result.patchDifference[j][i] = dp;
             if (options.computeLine) result.lineDifference[j][i] = dl;
@@ -166,6 +162,16 @@ struct LevelStore {
         const bool patchOff = options.computePatch && !(dp <= options.checkThresholdPatch);
         const bool lineOff = options.computeLine && !(dl <= options.checkThresholdLine);
         if (patchOff || lineOff) flagged[j][i] = 1;
+    }
+
+    /// Whether the fit of the level's radius @p k to vertex @p i bends more than the check
+    /// allows: its residual (in @p sums at @p at) times kFitResidualWeight beyond a threshold.
+    bool fitBends(std::size_t i, std::size_t k, const KernelSums& sums, std::size_t at) const
+    {
+        const std::size_t j = std::size_t(level.index[k]);
+        if (masked(i, k) || options.radii[j] < checkFrom) return false;
+        return (options.computePatch && kFitResidualWeight * patch(j, sums.patchResidual[at]) > options.checkThresholdPatch) ||
+               (options.computeLine && kFitResidualWeight * line(j, sums.lineResidual[at]) > options.checkThresholdLine);
     }
 
 private:
@@ -235,11 +241,20 @@ std::size_t evaluateAtSamples(const Level& level, const LevelRadii& radii, doubl
     interpolateFromSamples(level, h0, mesh.points, vertexNormal, skip, int(from.size()), from, to, unresolved,
                            residuals);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& range) {
-        for (std::size_t i = range.begin(); i < range.end(); ++i)
-            if (!skip[i] && !unresolved[i])
-                for (std::size_t k = 0; k < nr; ++k) store(i, k, fitted, k * nv + i);
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+            if (skip[i] || unresolved[i]) continue;
+            // Where the fit bends (its residual), it blurs for both of the check's kernels
+            // alike: such vertices are evaluated where they are, as those on creases.
+            bool bends = false;
+            for (std::size_t k = 0; k < nr && !residuals.empty(); ++k) bends = bends || store.fitBends(i, k, fitted, k * nv + i);
+            if (bends) {
+                unresolved[i] = 1;
+                continue;
+            }
+            for (std::size_t k = 0; k < nr; ++k) store(i, k, fitted, k * nv + i);
+        }
     });
-    // Vertices on creases and corners: evaluated where they are.
+    // Vertices on creases and corners, and where the fit bends: evaluated where they are.
     std::vector<std::uint32_t> direct;
     for (std::size_t i = 0; i < nv; ++i)
         if (unresolved[i] && !skip[i]) direct.push_back(std::uint32_t(i));
