@@ -78,6 +78,7 @@ def test_compute_equals_the_cli_bit_for_bit(tablet, tmp_path):
     assert np.array_equal(masked.V[whole], r.V[whole])  # balls clear of the border: the same, bit for bit
     with pytest.raises(msii.InvalidInputError, match="continue"):
         msii.compute(vertices, faces, 0.8, border="clip")
+    assert r.voxel_size > 0 and len(r.levels) == 16
 
 
 def test_pl_check_is_the_cli_option(tablet, tmp_path):
@@ -96,7 +97,6 @@ def test_pl_check_is_the_cli_option(tablet, tmp_path):
             column = cli["%s_%02d" % (letter, j + 1)]
             assert np.array_equal(getattr(off, letter)[:, j], column, equal_nan=True), "%s_%02d" % (letter, j + 1)
     assert (on.P != off.P).any() and (on.L != off.L).any()
-    assert r.voxel_size > 0 and len(r.levels) == 16
 
 
 def test_every_door_gives_the_same_values_on_a_scan_that_needs_repair(tablet, tmp_path):
