@@ -28,10 +28,12 @@
 ///    to the vertices from the samples on the vertex's side of the surface, weighted
 ///    towards those within about h/2; vertices on creases and corners, where that fails,
 ///    are evaluated where they are.
-/// 7. The check: the same histograms weighed with kernels 1.5 times narrower. Where P(r) or
-///    L(r) changes abruptly within a kernel's width (a sphere meeting a new sheet of the
-///    surface, or a crease), the blur differs between the two widths; a (vertex, radius)
-///    pair where P̂ or L̂ differ by more than a threshold is flagged.
+/// 7. The check: the same histograms weighed with kernels 1.5 times narrower, at r and
+///    halfway to the radius below. Where P(r) or L(r) changes abruptly within a kernel's
+///    width (a sphere meeting a new sheet of the surface, or a crease), the blur differs
+///    between the two widths; a (vertex, radius) pair where P̂ or L̂ differ by more than a
+///    threshold is flagged. Fitted vertices whose fit bends more than that are evaluated
+///    where they are, as in 6.
 /// 8. The flagged pairs are evaluated exactly from the triangles (src/invariants/
 ///    patch_line_exact.h), in one walk per vertex over its flagged radii, with sums that do
 ///    not depend on the order of the triangles, so tiles and windows keep to one piece's
@@ -100,7 +102,7 @@ struct PatchLineResult {
     /// exact sums evaluated; the vertices with at least one such pair.
     std::size_t pairs = 0, pairsExact = 0, verticesExact = 0;
     /// With PatchLineOptions::keepCheck, per [j][vertex]: 1 where the check flagged the pair,
-    /// and |P̂ − P̂_narrow|, |L̂ − L̂_narrow| (NaN where masked or not computed).
+    /// and its differences D of P̂ and L̂ (NaN where masked or not computed).
     std::vector<std::vector<std::uint8_t>> flagged;
     std::vector<std::vector<float>> patchDifference, lineDifference;
     double samplingSeconds = 0, gatherSeconds = 0;
