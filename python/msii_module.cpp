@@ -119,7 +119,7 @@ py::object featureArray(std::vector<std::vector<float>>& columns)
 
 py::object computeArrays(const py::array& vertices, const py::array& faces, double radius, int scales,
                  const std::string& invariants, bool exact, int threads, const py::object& progress,
-                 double memoryBudget, int tiles, const std::string& border)
+                 double memoryBudget, int tiles, const std::string& border, bool plCheck)
 {
     const TriMesh mesh = meshOf(vertices, faces);
     if (!(radius > 0) || !std::isfinite(radius)) throw py::value_error("radius must be a positive number.");
@@ -133,6 +133,7 @@ py::object computeArrays(const py::array& vertices, const py::array& faces, doub
     o.tiling.memoryBudget = memoryBudget;
     o.tiling.tilesPerAxis = tiles;
     o.border = parseBorderHandling(border);
+    o.invariants.patchLineExactWhereBlurred = plCheck;
     const bool follow = !progress.is_none();
     if (follow && !PyCallable_Check(progress.ptr()))
         throw py::value_error("progress must be a callable (stage, done, total) or None.");
@@ -178,6 +179,9 @@ py::object computeArrays(const py::array& vertices, const py::array& faces, doub
     out["reach"] = plan.reach;
     out["exact"] = exact;
     out["border"] = border;
+    out["pl_check"] = plCheck;
+    // P and L: the share of values evaluated exactly where the kernels blur (docs/method.md).
+    out["pl_exact_share"] = double(result.cost.patchLinePairsExact) / double(std::max<std::size_t>(1, result.cost.patchLinePairs));
     out["filled_share"] = py::array_t<float>(py::ssize_t(result.filledShare.size()), result.filledShare.data());
     // Diagnostics as objects (core/diagnostics.h): kind (e.g. "duplicate_faces_removed",
     // "holes_filled", "mostly_masked"), count (of faces, holes, vertices ...; 0 if nothing),
@@ -422,7 +426,7 @@ PYBIND11_MODULE(msii, m)
     m.def("compute", &computeArrays, py::arg("vertices"), py::arg("faces"), py::arg("radius"), py::arg("scales") = 16,
           py::arg("invariants") = "VSPL", py::arg("exact") = false, py::arg("threads") = 0,
           py::arg("progress") = py::none(), py::arg("memory_budget") = 0.0, py::arg("tiles") = 0,
-          py::arg("border") = "continue",
+          py::arg("border") = "continue", py::arg("pl_check") = true,
           "The integral invariants at N = scales radii r_j = j*radius/N for every vertex, as msii compute "
           "computes them (mesh preparation included; the same values bit for bit). Returns an object with V, S, P, L "
           "(float32 (n_vertices, N), None if not asked), filled_share (float32 (n_vertices,): how much of each "
@@ -433,6 +437,8 @@ PYBIND11_MODULE(msii, m)
           "(KeyboardInterrupt). memory_budget (bytes) or tiles (per axis) compute in tiles, with the same values. "
           "border='continue' (default) continues an open surface past its borders so that every vertex gets values; "
           "border='mask' gives NaN where a ball reaches a border instead. "
+          "pl_check=True (default) evaluates P and L exactly where kernels of two widths disagree (pl_exact_share: the "
+          "share of values so evaluated); False: the kernel sums alone, as msii compute --pl-check off. "
           "The GIL is released while computing.");
     m.def("metric", &metric, py::arg("result"), py::arg("metric") = "mahalanobis", py::arg("reference") = "flat",
           py::arg("p") = 2.0, py::arg("invariants") = "",

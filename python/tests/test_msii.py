@@ -81,6 +81,24 @@ def test_compute_equals_the_cli_bit_for_bit(tablet, tmp_path):
     assert r.voxel_size > 0 and len(r.levels) == 16
 
 
+def test_pl_check_is_the_cli_option(tablet, tmp_path):
+    # pl_check=False is msii compute --pl-check off, bit for bit; the default evaluates some
+    # values exactly (the tablet's wedges), which it says.
+    out = tmp_path / "scan.msii.ply"
+    subprocess.run([MSII, "compute", str(tablet), "-r", "0.8", "-q", "--pl-check", "off", "-o", str(out)], check=True)
+    cli = read_ply(out)
+    vertices, faces = msii.read_mesh(str(tablet))
+    off = msii.compute(vertices, faces, 0.8, invariants="PL", pl_check=False)
+    on = msii.compute(vertices, faces, 0.8, invariants="PL")
+    assert not off.pl_check and off.pl_exact_share == 0
+    assert on.pl_check and 0 < on.pl_exact_share < 1
+    for letter in "PL":
+        for j in range(16):
+            column = cli["%s_%02d" % (letter, j + 1)]
+            assert np.array_equal(getattr(off, letter)[:, j], column, equal_nan=True), "%s_%02d" % (letter, j + 1)
+    assert (on.P != off.P).any() and (on.L != off.L).any()
+
+
 def test_every_door_gives_the_same_values_on_a_scan_that_needs_repair(tablet, tmp_path):
     # A scan as real ones come: duplicate faces, degenerate faces, a flipped face, small
     # holes and a vertex in no face. `msii compute`, msii.compute and the C++ library's

@@ -62,6 +62,7 @@ struct Row {
     std::string name;
     std::size_t vertices = 0, compared = 0, maskedFastOnly = 0, maskedExactOnly = 0;
     double edgesPerRadius = 0, fastSeconds = 0;
+    double exactShare = 0;  ///< of the fast run's P and L values, those evaluated exactly where the kernels blur
     Difference all[4], largest[4];  // V, S, P, L
     Difference byRange[kRanges][4];
     struct Worst {
@@ -89,6 +90,7 @@ Row measure(const Case& c, const InvariantsOptions& settings, std::size_t numVer
     const Stopwatch fastTime;
     const ComputeResult fast = compute(c.mesh, o);
     row.fastSeconds = fastTime.seconds();
+    row.exactShare = double(fast.cost.patchLinePairsExact) / double(std::max<std::size_t>(1, fast.cost.patchLinePairs));
     row.vertices = c.mesh.numVertices();
     const double edge = fast.stats.medianEdge;
     row.edgesPerRadius = c.radius / edge;
@@ -193,6 +195,9 @@ int main(int argc, char** argv)
     InvariantsOptions settings;
     app.add_option("--precision", settings.minVoxelsPerRadius, "as msii compute --precision (default 6)");
     app.add_option("--pl-precision", settings.patchLinePrecision, "as msii compute --pl-precision (default: 4/3 of --precision)");
+    std::string plCheck = "on";
+    app.add_option("--pl-check", plCheck, "as msii compute --pl-check: on (default) or off, the kernel sums alone")
+        ->check(CLI::IsMember({"on", "off"}));
     bool byRadius = false;
     app.add_flag("--by-radius", byRadius, "also give P̂ and L̂ (and V̂, Ŝ) per range of radii: 3-8, 8-16, over 16 median edges");
     app.add_option("--worst", worst, "also list the K largest differences (vertex of the input, radius index)");
@@ -203,6 +208,7 @@ int main(int argc, char** argv)
     app.add_option("--seed", seed, "seed of the vertices and of the generated meshes (default 1)");
     app.add_option("--spacing", spacing, "vertex spacing of the generated set, mm (default 0.04)");
     CLI11_PARSE(app, argc, argv);
+    settings.patchLineExactWhereBlurred = plCheck == "on";
     if (!files.empty() && !(radius > 0)) {
         std::fprintf(stderr, "msii-accuracy: error: give the radius for the meshes (-r)\n");
         return 2;
@@ -235,6 +241,9 @@ int main(int argc, char** argv)
                 std::printf("|   near borders: %zu values masked by the fast mode only (its grid reaches a little "
                             "beyond r), %zu by the exact mode only | | | | | | | | |\n",
                             r.maskedFastOnly, r.maskedExactOnly);
+            if (settings.patchLineExactWhereBlurred && (settings.computePatch || settings.computeLine))
+                std::printf("|   P and L exact where the kernels blur: %.1f %% of the values | | | | | | | | |\n",
+                            100.0 * r.exactShare);
             if (byRadius)
                 for (int k = 0; k < kRanges; ++k)
                     std::printf("|   radii of %s | | | %s | %s | %s | %s | | |\n", kRangeNames[k],

@@ -30,6 +30,7 @@ struct ComputeArgs : CommonArgs {
     double voxelSize = 0;
     double precision = 6.0;
     double plPrecision = 0;  // 0 = 4/3 of precision (the engine's default)
+    std::string plCheck = "on";  // --pl-check: on (exact where the kernels blur) or off
     std::string units;           // --units: the mesh's units, recorded for pictures (empty: unstated)
     bool repair = false, strict = false, noSphere = false;
     double fillHoles = -1;      // longest hole border filled; -1 = pi R (default), 0 = none
@@ -99,6 +100,11 @@ struct MeshRunRecord {
     double readSeconds, writeSeconds, totalSeconds;
 };
 nlohmann::json runRecord(const MeshRunRecord& record);
+/// The `patch_line` of a JSON record: P and L's pairs given a value, and of them those
+/// evaluated exactly where the kernels blur.
+nlohmann::json patchLineRecord(const InvariantsCost& cost);
+/// ", P and L exact at S % of values" for the summary line ("" without P and L).
+std::string exactShareText(const InvariantsCost& cost);
 /// The `parameters` of a JSON record, mesh or raster (@p letters: the invariants, e.g. "VS").
 nlohmann::json parametersRecord(const ComputeArgs& args, const ScalePlan& plan, const std::string& letters,
                                 double maxHolePerimeter);

@@ -67,6 +67,7 @@ ComputeOptions computeOptionsOf(const ComputeArgs& args)
     inv.voxelSize = args.voxelSize;
     inv.minVoxelsPerRadius = args.precision;
     inv.patchLinePrecision = args.plPrecision;
+    inv.patchLineExactWhereBlurred = args.plCheck == "on";
     inv.select(invariantsOf(args));
     inv.exact = args.exact;
     o.repair = !args.strict;
@@ -442,8 +443,8 @@ OneResult computeOne(const ComputeArgs& args, const std::string& input, const st
     const MeshRunRecord record{args, input, output, read, options, result, readSeconds, writeSeconds, total.seconds()};
     writeTextFileAtomic(sidecar, runRecord(record).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
     if (!args.quiet)
-        std::fprintf(stderr, "msii: %s -> %s (%zu vertices, %.1f s)\n", input.c_str(), output.c_str(),
-                     read.mesh.numVertices(), total.seconds());
+        std::fprintf(stderr, "msii: %s -> %s (%zu vertices%s, %.1f s)\n", input.c_str(), output.c_str(),
+                     read.mesh.numVertices(), exactShareText(result.cost).c_str(), total.seconds());
     return {read.mesh.numVertices(), result.plan.voxelSize, total.seconds()};
 }
 
@@ -527,6 +528,12 @@ std::function<int()> addComputeCommand(CLI::App& app)
         // Given, it must be a precision: 0 (the engine's default) is not one.
         ->check(numberCheck([](double v) { return v >= 1 && v <= 64; },
                             "the P and L precision must be between 1 and 64 cells per radius"));
+    cmd->add_option("--pl-check", args->plCheck,
+                    "on (default): P and L are also summed with kernels 1.5 times narrower, and where the two "
+                    "disagree (a sphere meeting a thin part, a fold or a crease) evaluated exactly from the "
+                    "triangles, so that every value is within the bounds of docs/accuracy.md; off: the kernel "
+                    "sums alone, faster on scans with many thin parts")
+        ->check(CLI::IsMember({"on", "off"}));
     addCommonOptions(cmd, *args);
     addPropertyNamesOption(cmd, args->propertyPrefix);
     cmd->add_option("--units", args->units,

@@ -140,16 +140,18 @@ OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, c
     j["timings_seconds"] = {{"read", result.readSeconds}, {"prepare", result.prepareSeconds}, {"check", t.check},
                             {"level_set", t.levelSet},     {"occupancy", t.occupancy},  {"stencils", t.stencils},
                             {"interpolation", t.interpolation}, {"samples", t.samples}, {"patch_line", t.patchLine},
+                            {"patch_line_check", t.patchLineCheck}, {"patch_line_exact", t.patchLineExact},
                             {"write", result.writeSeconds}, {"total", total.seconds()}};
+    if (t.patchLinePairs > 0) j["patch_line"] = patchLineRecord(t);
     writeTextFileAtomic(sidecar, j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
     if (!args.quiet) {
         const int windows = result.windowsPerRow * result.windowsPerColumn;
         const std::string split = result.splitWindows > 0 ? ", " + std::to_string(result.splitWindows) +
                                                                 " split further for their spikes' surface"
                                                           : "";
-        std::fprintf(stderr, "msii: %s -> %s (%d x %d cells, %zu with heights, %zu bands, %d window%s%s, %.1f s)\n",
+        std::fprintf(stderr, "msii: %s -> %s (%d x %d cells, %zu with heights, %zu bands, %d window%s%s%s, %.1f s)\n",
                      input.c_str(), output.c_str(), grid.width, grid.height, result.input.numValid, result.bands.size(),
-                     windows, windows == 1 ? "" : "s", split.c_str(), total.seconds());
+                     windows, windows == 1 ? "" : "s", split.c_str(), exactShareText(t).c_str(), total.seconds());
     }
     return {result.input.numValid, result.plan.voxelSize, total.seconds()};
 }

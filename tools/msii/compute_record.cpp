@@ -46,6 +46,7 @@ nlohmann::json parametersRecord(const ComputeArgs& args, const ScalePlan& plan, 
             {"voxel_size_requested", args.voxelSize},
             {"precision_voxels_per_radius", args.precision},
             {"precision_patch_line", plPrecisionOf(args)},
+            {"pl_check", args.plCheck},
             {"levels", plan.numVolumeSphereLevels()},
             {"level_of_radius", plan.volumeSphereLevels},
             {"sample_level_of_radius", plan.patchLineLevels},
@@ -131,6 +132,23 @@ nlohmann::json preparationRecord(const PreparationSummary& p)
 
 } // namespace
 
+nlohmann::json patchLineRecord(const InvariantsCost& cost)
+{
+    return {{"pairs", cost.patchLinePairs},
+            {"pairs_exact", cost.patchLinePairsExact},
+            {"share_exact", double(cost.patchLinePairsExact) / double(std::max<std::size_t>(1, cost.patchLinePairs))},
+            {"vertices_exact", cost.patchLineVerticesExact}};
+}
+
+std::string exactShareText(const InvariantsCost& cost)
+{
+    if (cost.patchLinePairs == 0) return "";
+    char text[96];
+    std::snprintf(text, sizeof(text), ", P and L exact at %.1f %% of values",
+                  100.0 * double(cost.patchLinePairsExact) / double(cost.patchLinePairs));
+    return text;
+}
+
 nlohmann::json runRecord(const MeshRunRecord& r)
 {
     const ComputeArgs& args = r.args;
@@ -154,8 +172,10 @@ nlohmann::json runRecord(const MeshRunRecord& r)
                             {"level_set", t.levelSet}, {"occupancy", t.occupancy},
                             {"stencils", t.stencils},  {"interpolation", t.interpolation},
                             {"samples", t.samples},    {"patch_line", t.patchLine},
+                            {"patch_line_check", t.patchLineCheck}, {"patch_line_exact", t.patchLineExact},
                             {"exact", t.exact},        {"write", r.writeSeconds},
                             {"total", r.totalSeconds}};
+    if (t.patchLinePairs > 0) j["patch_line"] = patchLineRecord(t);
     if (result.tiled)
         j["tiling"] = {{"tiles_per_axis", result.tiling.tilesPerAxis},
                        {"tiles", result.tiling.tiles},

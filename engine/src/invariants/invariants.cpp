@@ -227,6 +227,7 @@ void computeFastValues(const TriMesh& mesh, const InvariantsOptions& options, co
         plOptions.computeLine = options.computeLine;
         plOptions.borderDistance = border;
         plOptions.vertexSpacing = plan.vertexSpacing > 0 ? plan.vertexSpacing : result.stats.medianEdge;
+        plOptions.exactWhereBlurred = options.patchLineExactWhereBlurred;
         PatchLineResult pl = computePatchLine(mesh, plOptions, context);
         result.features[Invariant::Patch] = std::move(pl.patch);
         result.features[Invariant::Line] = std::move(pl.line);
@@ -234,6 +235,11 @@ void computeFastValues(const TriMesh& mesh, const InvariantsOptions& options, co
         result.cost.directEvaluations = pl.directEvaluations;
         result.cost.samples = pl.samplingSeconds;
         result.cost.patchLine = pl.gatherSeconds;
+        result.cost.patchLineCheck = pl.checkSeconds;
+        result.cost.patchLineExact = pl.exactSeconds;
+        result.cost.patchLinePairs = pl.pairs;
+        result.cost.patchLinePairsExact = pl.pairsExact;
+        result.cost.patchLineVerticesExact = pl.verticesExact;
     }
 }
 
@@ -305,8 +311,11 @@ InvariantsCost& InvariantsCost::operator+=(const InvariantsCost& piece)
     stencilNodes += piece.stencilNodes;
     numSamples += piece.numSamples;
     directEvaluations += piece.directEvaluations;
+    patchLinePairs += piece.patchLinePairs, patchLinePairsExact += piece.patchLinePairsExact;
+    patchLineVerticesExact += piece.patchLineVerticesExact;
     check += piece.check, levelSet += piece.levelSet, occupancy += piece.occupancy, stencils += piece.stencils;
     interpolation += piece.interpolation, samples += piece.samples, patchLine += piece.patchLine;
+    patchLineCheck += piece.patchLineCheck, patchLineExact += piece.patchLineExact;
     exact += piece.exact, total += piece.total;
     return *this;
 }

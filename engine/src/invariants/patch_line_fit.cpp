@@ -26,12 +26,44 @@ constexpr double kWellSpread = 0.02;
 /// samples near a group lie beyond 2h of a point; of 2³, two thirds).
 constexpr int kFitGroupBits = 1;
 
+/// The weighted RMS residual of the least-squares fit (normal equations @p m, determinant
+/// @p det; samples @p index with weights @p weight and basis @p basis) of each field with a
+/// residuals entry, into residuals[f][i]: Σ w (f − c·φ)² = Σ w f² − c·b with b = Σ w φ f
+/// and c = m⁻¹ b.
+void fitResiduals(const double m[3][3], double det, const std::vector<std::uint32_t>& index,
+                  const std::vector<double>& weight, const std::vector<std::array<double, 3>>& basis,
+                  const std::vector<const float*>& values, const std::vector<float*>& residuals, std::size_t i)
+{
+    double inverse[3][3];  // m is symmetric: its cofactors over det
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) {
+            const int a1 = (a + 1) % 3, a2 = (a + 2) % 3, b1 = (b + 1) % 3, b2 = (b + 2) % 3;
+            inverse[b][a] = (m[a1][b1] * m[a2][b2] - m[a1][b2] * m[a2][b1]) / det;
+        }
+    double total = 0;
+    for (const double w : weight) total += w;
+    for (std::size_t f = 0; f < residuals.size(); ++f) {
+        if (!residuals[f]) continue;
+        double b[3] = {0, 0, 0}, squares = 0;
+        for (std::size_t k = 0; k < index.size(); ++k) {
+            const double v = values[f][index[k]], wv = weight[k] * v;
+            for (int a = 0; a < 3; ++a) b[a] += wv * basis[k][a];
+            squares += wv * v;
+        }
+        double fitted = 0;
+        for (int a = 0; a < 3; ++a)
+            for (int c = 0; c < 3; ++c) fitted += b[a] * inverse[a][c] * b[c];
+        residuals[f][i] = float(std::sqrt(std::max(0.0, squares - fitted) / total));
+    }
+}
+
 } // namespace
 
 void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec3>& p,
                             const std::vector<Vec3>& n, const std::vector<char>& skip,
                             int numFields, const std::vector<const float*>& values,
-                            const std::vector<float*>& out, std::vector<char>& unresolved)
+                            const std::vector<float*>& out, std::vector<char>& unresolved,
+                            const std::vector<float*>& residuals)
 {
     unresolved.assign(p.size(), 0);
     const double h = level.h, radius2 = 4.0 * h * h;
@@ -114,6 +146,7 @@ void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec
                     unresolved[i] = 1;
                     continue;
                 }
+                if (!residuals.empty()) fitResiduals(m, det, index, weight, basis, values, residuals, i);
                 for (std::size_t k = 0; k < index.size(); ++k)
                     weight[k] *= (c00 * basis[k][0] + c01 * basis[k][1] + c02 * basis[k][2]) / det;
                 for (int f = 0; f < numFields; ++f) {

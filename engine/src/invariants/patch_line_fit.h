@@ -27,9 +27,13 @@ constexpr double kDirectCellsPerSpacing = 1.2;
 /// samples within 2h on the point's side of the surface (kSameSide), weighted (1 −
 /// (d/2h)²)⁸, so linear fields are reproduced. Where such samples do not span the plane
 /// (creases, corners), @p unresolved is set instead: those points are evaluated directly.
+/// For the first @p residuals[k] != nullptr fields it also gives the fit's weighted RMS
+/// residual, residuals[k][i]: how far the field bends within the fit's window (a crease
+/// or the onset of a new sheet nearby), which the fit blurs.
 void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec3>& p,
                             const std::vector<Vec3>& n, const std::vector<char>& skip,
                             int numFields, const std::vector<const float*>& values,
-                            const std::vector<float*>& out, std::vector<char>& unresolved);
+                            const std::vector<float*>& out, std::vector<char>& unresolved,
+                            const std::vector<float*>& residuals = {});
 
 } // namespace msii::detail

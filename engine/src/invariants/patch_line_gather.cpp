@@ -4,6 +4,9 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include <chrono>
+#include <mutex>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -208,32 +211,62 @@ public:
     }
 
     /// The histograms @p hist weighed with the kernel of each radius k of the level: P and
-    /// L at point @p i of @p n, into outP[k·n + i] and outL[k·n + i].
-    void weigh(const std::vector<Channels>& hist, std::size_t i, std::size_t n, std::vector<float>& outP,
-               std::vector<float>& outL) const
+    /// L at point @p i of @p n, into out.patch and out.line at [k·n + i].
+    void weigh(const std::vector<Channels>& hist, std::size_t i, std::size_t n, KernelSums& out) const
     {
         double inside = 0;  // area of the bins below `counted`
         int counted = 0;
         for (int k = 0; k < mNumRadii; ++k) {
-            const auto [firstP, lastP] = mKernel.patchBins[std::size_t(k)];
-            if (firstP < counted) inside = 0, counted = 0;  // not expected: radii ascend
-            for (; counted < firstP; ++counted) inside += double(hist[std::size_t(counted)][0]);
-            // Bins [firstP, lastP) hold the kernel's support for P and L alike; in
-            // pairs of bins: P in the channels 0 and 2, L in 1 and 3.
-            const float* wk = mKernel.weights.data() + std::size_t(k) * kChannels * mKernel.numBins;
-            Channels even{}, odd{};
-            for (int b = firstP; b < lastP; b += 2) {
-                even += hist[std::size_t(b)] * loadChannels(wk + kChannels * std::size_t(b));
-                odd += hist[std::size_t(b) + 1] * loadChannels(wk + kChannels * (std::size_t(b) + 1));
-            }
-            const double sumP = inside + double(even[0] + even[2]) + double(odd[0] + odd[2]);
-            const double sumL = double(even[1] + even[3]) + double(odd[1] + odd[3]);
-            outP[std::size_t(k) * n + i] = float(sumP);
-            outL[std::size_t(k) * n + i] = float(sumL);
+            const auto [sumP, sumL] = weighRow(hist, k, inside, counted);
+            out.patch[std::size_t(k) * n + i] = float(sumP);
+            out.line[std::size_t(k) * n + i] = float(sumL);
+        }
+    }
+
+    /// The check (docs/method.md, Exact where the kernels blur): per radius k, the larger
+    /// |P̂ − P̂_narrow| and |L̂ − L̂_narrow| at r and halfway to the radius below, into
+    /// out.checkPatch and out.checkLine at [k·n + i] (after weigh()).
+    void check(const std::vector<Channels>& hist, std::size_t i, std::size_t n, KernelSums& out) const
+    {
+        double inside = 0;
+        int counted = 0;
+        for (int k = 0; k < mNumRadii; ++k) {
+            const int row = mNumRadii + 3 * k;
+            const auto [midP, midL] = weighRow(hist, row, inside, counted);
+            const auto [midNarrowP, midNarrowL] = weighRow(hist, row + 1, inside, counted);
+            const auto [narrowP, narrowL] = weighRow(hist, row + 2, inside, counted);
+            const std::size_t at = std::size_t(k) * n + i;
+            const double p = double(out.patch[at]), l = double(out.line[at]);
+            const std::size_t mid = std::size_t(row), r = std::size_t(row + 2);
+            out.checkPatch[at] = float(std::max(std::abs(midP - midNarrowP) * mKernel.patchScale[mid],
+                                                std::abs(p - narrowP) * mKernel.patchScale[r]));
+            out.checkLine[at] = float(std::max(std::abs(midL - midNarrowL) * mKernel.lineScale[mid],
+                                               std::abs(l - narrowL) * mKernel.lineScale[r]));
         }
     }
 
 private:
+    /// Row @p row of the kernel applied to @p hist: (P, L). @p inside and @p counted keep the
+    /// running sum of the areas below the rows' supports (from 0 again where a row's support
+    /// starts below the last one's).
+    std::pair<double, double> weighRow(const std::vector<Channels>& hist, int row, double& inside, int& counted) const
+    {
+        const auto [firstP, lastP] = mKernel.patchBins[std::size_t(row)];
+        if (firstP < counted) inside = 0, counted = 0;
+        for (; counted < firstP; ++counted) inside += double(hist[std::size_t(counted)][0]);
+        // Bins [firstP, lastP) hold the kernel's support for P and L alike; in pairs of
+        // bins: P in the channels 0 and 2, L in 1 and 3.
+        const float* wk = mKernel.weights.data() + std::size_t(row) * kChannels * mKernel.numBins;
+        Channels even{}, odd{};
+        for (int b = firstP; b < lastP; b += 2) {
+            even += hist[std::size_t(b)] * loadChannels(wk + kChannels * std::size_t(b));
+            odd += hist[std::size_t(b) + 1] * loadChannels(wk + kChannels * (std::size_t(b) + 1));
+        }
+        const double sumP = inside + double(even[0] + even[2]) + double(odd[0] + odd[2]);
+        const double sumL = double(even[1] + even[3]) + double(odd[1] + odd[3]);
+        return {sumP, sumL};
+    }
+
     const Level& mLevel;
     const LevelKernel& mKernel;
     const int mL;
@@ -270,19 +303,25 @@ CellGroups groupByCells(const std::vector<Vec3>& points, double h0, int l, int g
 }
 
 void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
-                    const std::vector<Vec3>& points, const std::vector<char>& skip,
-                    std::vector<float>& outP, std::vector<float>& outL, RunContext* progress)
+                    const std::vector<Vec3>& points, const std::vector<char>& skip, KernelSums& out,
+                    RunContext* progress)
 {
-    const std::size_t n = points.size();
-    outP.assign(std::size_t(kernel.numRadii) * n, 0.0f);
-    outL.assign(std::size_t(kernel.numRadii) * n, 0.0f);
+    const std::size_t n = points.size(), size = std::size_t(kernel.numRadii) * n;
+    out.patch.assign(size, 0.0f);
+    out.line.assign(size, 0.0f);
+    out.checkPatch.assign(kernel.check() ? size : 0, 0.0f);
+    out.checkLine.assign(out.checkPatch.size(), 0.0f);
+    out.checkCpuSeconds = 0;
     const CellGroups groups = groupByCells(points, h0, level.index, kGroupBits);
     const auto& order = groups.order;
     const auto& groupStart = groups.start;
     const LevelGather gather(level, kernel);
     if (progress) progress->start("P and L, level " + std::to_string(level.index), groupStart.size() - 1);
+    const bool check = kernel.check();
+    std::mutex checkMutex;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groupStart.size() - 1), [&](const auto& range) {
         GatherScratch scratch = gather.scratch();
+        double checkSeconds = 0;  // of this range's check
         for (std::size_t g = range.begin(); g < range.end(); ++g) {
             const std::size_t begin = groupStart[g], end = groupStart[g + 1];
             const GroupOrigin origin = gather.groupOrigin(groups.cell[order[begin].second]);
@@ -293,10 +332,16 @@ void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
                 const float px = float(points[i].x - origin.ox), py = float(points[i].y - origin.oy),
                             pz = float(points[i].z - origin.oz);
                 gather.histogram(px, py, pz, scratch);
-                gather.weigh(scratch.hist, i, n, outP, outL);
+                gather.weigh(scratch.hist, i, n, out);
+                if (!check) continue;
+                const auto start = std::chrono::steady_clock::now();
+                gather.check(scratch.hist, i, n, out);
+                checkSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             }
             if (progress) progress->advance();
         }
+        const std::lock_guard<std::mutex> lock(checkMutex);
+        out.checkCpuSeconds += checkSeconds;
     });
     if (progress) progress->end();
 }

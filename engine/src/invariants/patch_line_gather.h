@@ -48,7 +48,19 @@ struct CellGroups {
 /// @p points grouped by cells of level @p l, (2^@p groupBits)³ cells a group.
 CellGroups groupByCells(const std::vector<Vec3>& points, double h0, int l, int groupBits = 2);
 
-/// Unnormalised P ∗ K and L ∗ K at @p points for the radii of one level: out[k·n + q].
+/// Unnormalised P ∗ K and L ∗ K at points, for the radii of one level: [k·n + q] for radius
+/// k and point q of n; with the check, its differences of P̂ and L̂ between the default and
+/// the narrow kernels, the larger of those at r and halfway to the radius below.
+struct KernelSums {
+    std::vector<float> patch, line;
+    std::vector<float> checkPatch, checkLine;  ///< empty without the check
+    /// Fitted to vertices (patch_line_fit.h), with the check: the fit's residuals of patch and
+    /// line; else empty.
+    std::vector<float> patchResidual, lineResidual;
+    double checkCpuSeconds = 0;  ///< the check's kernels' time, summed over threads
+};
+
+/// The kernel sums (KernelSums) of one level at @p points, into @p out.
 /// Each sample stands for its area spread around its centroid with covariance C: a
 /// second-order quadrature, ∫ f(|x − p|) dA ≈ a (f(d) + ½ (f″(d) q + f′(d) s)), with q =
 /// ûᵀCû and s = (tr C − q)/d (the Hessian of f(|x − p|) is f″ ûûᵀ + f′ (I − ûûᵀ)/d). The
@@ -59,7 +71,7 @@ CellGroups groupByCells(const std::vector<Vec3>& points, double h0, int l, int g
 /// samples of the list whose bounding box comes within its reach (about 4/5 of the list on
 /// the finest level of the benchmark surface, of which 2/3 lie within reach).
 void evaluatePoints(const Level& level, const LevelKernel& kernel, double h0,
-                    const std::vector<Vec3>& points, const std::vector<char>& skip,
-                    std::vector<float>& outP, std::vector<float>& outL, RunContext* progress);
+                    const std::vector<Vec3>& points, const std::vector<char>& skip, KernelSums& out,
+                    RunContext* progress);
 
 } // namespace msii::detail

@@ -171,22 +171,33 @@ inline Channels loadChannels(const float* from)
     return v;
 }
 
-/// The kernel of one level: weights per radius and histogram bin.
+/// How much narrower the check's kernels are than the default ones (docs/method.md, Exact
+/// where the kernels blur): knot spacings w/1.5. Within the default kernels' support.
+constexpr double kCheckNarrowing = 1.5;
+
+/// The kernel of one level: weights per row and histogram bin. Rows [0, numRadii) are the
+/// level's radii; with the check, each radius k also has three rows from numRadii + 3k on:
+/// the default kernel halfway to the radius below (r − Δ/2, Δ the spacing of the radii), the
+/// narrow one there, and the narrow one at r (docs/method.md, The check).
 struct LevelKernel {
     double bin = 0, reach = 0;
-    int reachCells = 0, numBins = 0, numRadii = 0;
-    /// [(k · numBins + b) · kChannels + c]: the weight of channel c (a, a·g, a·q, a·g·q) of
-    /// bin b for radius k of the level: P from the channels a and a·q, L from the others.
+    int reachCells = 0, numBins = 0, numRadii = 0, numRows = 0;
+    /// [(row · numBins + b) · kChannels + c]: the weight of channel c (a, a·g, a·q, a·g·q) of
+    /// bin b for a row: P from the channels a and a·q, L from the others.
     std::vector<float> weights;
-    /// Per radius, the bins [first, last) of the kernel's support, an even number of them.
+    /// Per row, the bins [first, last) of the kernel's support, an even number of them.
     /// Below first, P's weights are those of a whole area, (1, 0): a running sum of areas.
     std::vector<std::pair<int, int>> patchBins;
+    /// Per row: what turns its sums into P̂ (1/(π (r² + bin²/6))) and L̂ (1/(2π r)).
+    std::vector<double> patchScale, lineScale;
+    bool check() const { return numRows > numRadii; }
 };
 
 /// The kernel of the radii @p r (ascending) on a level of cell @p h: weights per radius and
 /// bin centre d_b = (b + 1/2)·bin (paper Eq. 2 for P and L as sums over the distance
 /// histogram): f(d) = F((r − d)/w) for P, K((d − r)/w)/w for L (coarea formula), and f″/2
-/// for the channels a·q and a·g·q (evaluatePoints).
-LevelKernel makeLevelKernel(const std::vector<double>& radii, double h, int level);
+/// for the channels a·q and a·g·q (evaluatePoints). With @p spacing > 0 (Δ, the spacing of
+/// all radii), also the check's rows.
+LevelKernel makeLevelKernel(const std::vector<double>& radii, double h, int level, double spacing = 0);
 
 } // namespace msii::detail

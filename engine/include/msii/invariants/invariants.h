@@ -34,6 +34,11 @@ struct InvariantsOptions {
     /// are what brings their mean differences from the exact mode on closed and scan-like
     /// slabs within 1e-3 (P) and 3e-3 (L) (docs/accuracy.md).
     double patchLinePrecision = 0;
+    /// P and L: compare the kernels of two widths, and evaluate exactly from the triangles the
+    /// (vertex, radius) pairs where they disagree (PatchLineOptions::exactWhereBlurred;
+    /// docs/method.md, Exact where the kernels blur). Off: the kernel sums alone, faster on
+    /// scans with many thin parts, within the bounds of docs/accuracy.md only on average.
+    bool patchLineExactWhereBlurred = true;
     /// Which invariants (paper Eq. 2). V and S share the level set and one stencil pass;
     /// P and L share one pass over the surface samples.
     bool computeVolume = true, computeSphere = true, computePatch = true, computeLine = true;
@@ -71,9 +76,13 @@ struct InvariantsCost {
     std::size_t stencilNodes = 0;                     ///< V and S stencil evaluations, all levels
     std::size_t numSamples = 0;                       ///< P and L samples on the finest level
     std::size_t directEvaluations = 0;                ///< PatchLineResult::directEvaluations
-    /// Seconds per stage; P and L: sampling the surface, kernel sums.
+    /// P and L (vertex, radius) pairs given a value, of them those evaluated exactly where
+    /// the kernels blur, and the vertices with such a pair (PatchLineResult).
+    std::size_t patchLinePairs = 0, patchLinePairsExact = 0, patchLineVerticesExact = 0;
+    /// Seconds per stage; P and L: sampling the surface, kernel sums (the check's kernels
+    /// included, patchLineCheck of them), exact sums where the kernels blur.
     double check = 0, levelSet = 0, occupancy = 0, stencils = 0, interpolation = 0;
-    double samples = 0, patchLine = 0, exact = 0;
+    double samples = 0, patchLine = 0, patchLineCheck = 0, patchLineExact = 0, exact = 0;
     double total = 0;
 
     /// Adds the cost of another piece: counts and seconds summed, the largest level set's

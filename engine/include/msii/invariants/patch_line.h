@@ -28,14 +28,31 @@
 ///    to the vertices from the samples on the vertex's side of the surface, weighted
 ///    towards those within about h/2; vertices on creases and corners, where that fails,
 ///    are evaluated where they are.
+/// 7. The check: the same histograms weighed with kernels 1.5 times narrower, at r and
+///    halfway to the radius below. Where P(r) or L(r) changes abruptly within a kernel's
+///    width (a sphere meeting a new sheet of the surface, or a crease), the blur differs
+///    between the two widths; a (vertex, radius) pair where P̂ or L̂ differ by more than a
+///    threshold is flagged. Fitted vertices whose fit bends more than that are evaluated
+///    where they are, as in 6.
+/// 8. The flagged pairs are evaluated exactly from the triangles (src/invariants/
+///    patch_line_exact.h), in one walk per vertex over its flagged radii, with sums that do
+///    not depend on the order of the triangles, so tiles and windows keep to one piece's
+///    values bit for bit.
 
 #include <msii/core/run_context.h>
 #include <msii/mesh/trimesh.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 namespace msii {
+
+/// The check's default thresholds, derived in docs/method.md (Exact where the kernels
+/// blur): a pair whose fast value may be off by more than about a tenth of the stated bounds
+/// (P̂ 5e-3, L̂ 1.5e-2) is evaluated exactly.
+constexpr double kCheckThresholdPatch = 1e-3;
+constexpr double kCheckThresholdLine = 3e-3;
 
 struct PatchLineOptions {
     std::vector<double> radii;       ///< ascending radii (mesh units)
@@ -60,6 +77,16 @@ struct PatchLineOptions {
     /// takes the route the whole mesh takes (tiles pass the whole mesh's); 0 = this mesh's
     /// median edge length.
     double vertexSpacing = 0;
+    /// Steps 7 and 8: re-evaluate exactly the pairs where the kernels of two widths disagree
+    /// (docs/method.md, Exact where the kernels blur).
+    bool exactWhereBlurred = true;
+    /// Flag a pair where |P̂ − P̂_narrow| exceeds this (and P is computed).
+    double checkThresholdPatch = kCheckThresholdPatch;
+    /// Flag a pair where |L̂ − L̂_narrow| exceeds this (and L is computed).
+    double checkThresholdLine = kCheckThresholdLine;
+    /// Keep the check's figures per pair (PatchLineResult::flagged, patchDifference and
+    /// lineDifference), e.g. to study it; they are computed also without exactWhereBlurred.
+    bool keepCheck = false;
 };
 
 struct PatchLineResult {
@@ -71,7 +98,17 @@ struct PatchLineResult {
     /// Vertices evaluated where they are on a coarse level instead of interpolated from the
     /// samples (creases, corners), summed over the levels.
     std::size_t directEvaluations = 0;
+    /// (vertex, radius) pairs given a value, and of them those the check flagged and the
+    /// exact sums evaluated; the vertices with at least one such pair.
+    std::size_t pairs = 0, pairsExact = 0, verticesExact = 0;
+    /// With PatchLineOptions::keepCheck, per [j][vertex]: 1 where the check flagged the pair,
+    /// and its differences D of P̂ and L̂ (NaN where masked or not computed).
+    std::vector<std::vector<std::uint8_t>> flagged;
+    std::vector<std::vector<float>> patchDifference, lineDifference;
     double samplingSeconds = 0, gatherSeconds = 0;
+    /// Of gatherSeconds, the check's narrow kernels (an estimate: their share of the kernel
+    /// sums' work); and the exact sums of the flagged pairs.
+    double checkSeconds = 0, exactSeconds = 0;
 };
 
 /// The sample level of each radius: gridLevelOfRadius, except that a coarsest level
