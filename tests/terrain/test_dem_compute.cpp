@@ -1,4 +1,5 @@
-// The DEM engine in process (terrain/dem_compute.h): a generated GeoTIFF with nodata
+// The DEM engine's mesh route in process (terrain/dem_compute.h, DemEngine::Mesh, or P and
+// L asked; the height-field route: test_dem_heights.cpp): a generated GeoTIFF with nodata
 // patches, computed in one window and in windows with halos, has the values of the
 // pipeline (pipeline/compute.h) run on the DEM's whole mesh, bit for bit, cell by cell; a
 // band that the options cannot give is refused before any computation, naming those that
@@ -159,6 +160,7 @@ TEST(DemCompute, SpikyWindowsAreSplitAndKeepTheValuesOfOnePiece)
     o.compute.invariants.scales = 4;
     o.compute.invariants.select({Invariant::Volume});
     o.bands = {"V_01", "V_04", "quality", "filled_share"};
+    o.engine = DemEngine::Mesh;  // the mesh route's windows (the height field has no surface to split)
     const DemComputeResult one = computeDem(input, dir.file("one.tif"), o);
     ASSERT_EQ(one.windowsPerRow * one.windowsPerColumn, 1);
     EXPECT_EQ(one.splitWindows, 0);
@@ -192,6 +194,7 @@ TEST(DemCompute, SpikesTooDenseForTheBudgetWhenSplitAreRefusedAtOnce)
     o.compute.invariants.radius = 3;
     o.compute.invariants.scales = 4;
     o.compute.tiling.memoryBudget = 50e6;
+    o.engine = DemEngine::Mesh;
     try {
         computeDem(input, dir.file("out.tif"), o);
         FAIL() << "a surface of spikes 5 km high was computed in 50 MB";

@@ -398,7 +398,8 @@ TEST(MsiiTerrain, RenderAndMapTakeTheGeoTiff)
 TEST(MsiiTerrain, ComputesOnlyWhatTheBandsNeedAndQualityComesFirst)
 {
     const fs::path onlyV = tempDir() / "only_v.msii.tif", withP = tempDir() / "with_p.msii.tif";
-    const std::string common = "compute '" + demSample() + "' -r 5 -n 4 -q --overwrite --float32 ";
+    // On the mesh route (P asked takes it): the same level set with P or without.
+    const std::string common = "compute '" + demSample() + "' -r 5 -n 4 -q --overwrite --float32 --engine mesh ";
     RunResult r = run(MSII_EXE, common + "--raster-output '" + onlyV.string() + "'");
     ASSERT_EQ(r.code, 0) << r.err;
     const std::string record = readFile((tempDir() / "only_v.msii.json").string());

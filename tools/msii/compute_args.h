@@ -34,6 +34,7 @@ struct ComputeArgs : CommonArgs {
     std::string units;           // --units: the mesh's units, recorded for pictures (empty: unstated)
     bool repair = false, strict = false, noSphere = false;
     double fillHoles = -1;      // longest hole border filled; -1 = pi R (default), 0 = none
+    std::string engine = "heights";  ///< a DEM's V and S: heights or mesh
     std::string border = "continue";  // --border: continue (default) or mask
     std::string invariants = "V,S,P,L";
     bool exact = false;

@@ -556,6 +556,13 @@ std::function<int()> addComputeCommand(CLI::App& app)
                     "there")
         ->type_name("continue|mask")
         ->check(CLI::IsMember({"continue", "mask"}));
+    cmd->add_option("--engine", args->engine,
+                    "For a DEM: heights (default) computes V and S straight from the height field, without a "
+                    "level set; mesh computes them on the DEM's mesh through the level set, as for scans. P and L "
+                    "always take the mesh (the record says so). Meshes, terrain given as a PLY included, always "
+                    "take the level set")
+        ->type_name("heights|mesh")
+        ->check(CLI::IsMember({"heights", "mesh"}));
     cmd->add_option("--invariants", args->invariants,
                     "Which invariants: letters of V, S, P and L, together or comma-separated (default V,S,P,L; "
                     "VS and v,s are alike)");

@@ -2,6 +2,7 @@
 /// prepared and computed as any mesh, and the chosen features written back as a
 /// Cloud-Optimized GeoTIFF on the input's grid (docs/terrain.md).
 #include "compute_args.h"
+#include "feature_input.h"
 
 #include <msii/core/errors.h>
 #include <msii/core/run_context.h>
@@ -10,6 +11,7 @@
 #include <msii/core/version.h>
 #include <msii/io/atomic_file.h>
 #include <msii/io/feature_properties.h>
+#include <msii/io/write_ply.h>
 #include <msii/mesh/prepare_mesh.h>
 #include <msii/terrain/dem.h>
 #include <msii/terrain/dem_compute.h>
@@ -65,6 +67,7 @@ OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, c
     options.band = args.band;
     options.windowCells = args.windowCells;
     options.float32 = args.float32;
+    options.engine = args.engine == "mesh" ? DemEngine::Mesh : DemEngine::HeightField;
     if (!args.tileOfMosaic.empty()) options.region = regionOfPart(input, args.tileOfMosaic);
     std::ostringstream description;
     description << "msii " << versionString() << " compute R=" << args.radius << " N=" << args.scales << " of "
@@ -79,11 +82,25 @@ OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, c
                                // Relative to the output's folder: found again when both move together.
                                {"MSII_INPUT", fs::absolute(input).lexically_relative(fs::absolute(output).parent_path()).string()}};
 
+    // A .ply name: the DEM's mesh with the bands as vertex properties (as msii metric writes
+    // one), through a GeoTIFF beside it that is removed once the PLY is written.
+    const bool ply = fs::path(output).extension() == ".ply";
+    const std::string rasterOutput = ply ? output + ".part.tif" : output;
+    struct RemoveOnExit {
+        std::string path;
+        ~RemoveOnExit()
+        {
+            if (!path.empty()) {
+                std::error_code ec;
+                fs::remove(path, ec);
+            }
+        }
+    } removeRaster{ply ? rasterOutput : std::string()};
     TerminalProgress terminal(progressStyle(args));
     RunContext progress(terminal.listener());
     DemComputeResult result;
     try {
-        result = computeDem(input, output, options, &progress);
+        result = computeDem(input, rasterOutput, options, &progress);
     } catch (const InvalidInputError& e) {
         std::string what = e.what();
         const std::string name = fs::path(input).filename().string();
@@ -93,6 +110,15 @@ OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, c
         if (dynamic_cast<const MemoryLimitError*>(&e))
             what += " (--memory-budget sets the memory a window may take)";
         throw InvalidInputError(what.rfind(name, 0) == 0 ? what : name + ": " + what);
+    }
+    if (ply) {
+        FeatureMesh mesh = featureMeshFromRaster(rasterOutput);
+        WritePlyOptions po;
+        po.propertyPrefix = args.propertyPrefix;
+        po.comments = mesh.comments;
+        po.comments.push_back(description.str() + " (quality: a plane's value where NaN)");
+        qualityWithoutNaN(mesh.properties);
+        writePly(output, mesh.mesh, mesh.properties, po);
     }
     const RasterGeoreference& grid = result.input.georeference;
     if (!args.quiet)
@@ -131,13 +157,17 @@ OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, c
                                          {"row", options.region.row},
                                          {"cols", options.region.cols},
                                          {"rows", options.region.rows}};
+    j["engine"] = {{"asked", args.engine},
+                   {"used", result.engine == DemEngine::HeightField ? "heights" : "mesh"},
+                   {"note", result.engineNote}};
     j["mesh"] = {{"triangles", result.triangles},
                  {"masked_values", result.masked.total()},
                  {"cells_with_filled_share", result.masked.withFilledShare}};
     addDiagnostics(j, result.diagnostics);
     if (const double peak = peakMemoryBytes(); peak > 0) j["peak_memory_bytes"] = peak;
     const InvariantsCost& t = result.cost;
-    j["timings_seconds"] = {{"read", result.readSeconds}, {"prepare", result.prepareSeconds}, {"check", t.check},
+    j["timings_seconds"] = {{"read", result.readSeconds}, {"prepare", result.prepareSeconds},
+                            {"height_field", result.heightFieldSeconds}, {"check", t.check},
                             {"level_set", t.levelSet},     {"occupancy", t.occupancy},  {"stencils", t.stencils},
                             {"interpolation", t.interpolation}, {"samples", t.samples}, {"patch_line", t.patchLine},
                             {"patch_line_check", t.patchLineCheck}, {"patch_line_exact", t.patchLineExact},

@@ -1,7 +1,11 @@
 #include <msii/terrain/dem_compute.h>
 
+#include <msii/terrain/grid_continuation.h>
+#include <msii/terrain/height_field.h>
+
 #include <msii/core/errors.h>
 #include <msii/core/stopwatch.h>
+#include <msii/invariants/scales.h>
 #include <msii/io/feature_properties.h>
 #include <msii/mesh/prepare_mesh.h>
 #include <msii/tiling/tiled_compute.h>
@@ -142,6 +146,11 @@ struct WindowLayout {
     bool oneWindow = true;
     /// Windows' options: with the shared plan when there are several.
     ComputeOptions options;
+    /// The height-field route: its kernel's options (radii, cell, which radii), and the grid's
+    /// filling and continuation.
+    bool heightField = false;
+    HeightFieldOptions kernel;
+    GridContinuationOptions continuation;
 };
 
 /// The plan of several windows, made on the window of 1024² cells at the raster's centre:
@@ -230,6 +239,74 @@ WindowLayout layWindows(const DemSource& source, const std::string& input, const
     if (w.side < 16)
         throw InvalidInputError("the memory budget is too small for a window of the raster at this radius (its halo is " +
                                 std::to_string(w.wideHalo) + " cells wide)");
+    return w;
+}
+
+/// The height-field route's windows (docs/terrain.md, Engines): no plan, halos in cells from
+/// the radius alone. The narrow halo holds every ball an own cell sums over (S's reaches
+/// R(1 + 1/20)); the wide one also a gap that the whole raster fills (at most half its
+/// perimeter across) and, with borders continued, what the continuation of a cell in the
+/// balls reads: its nearest height, within the margin, that height's mirror point as far
+/// again, and the plane's fit radius about it.
+WindowLayout layHeightFieldWindows(const DemSource& source, const DemComputeOptions& options,
+                                   const std::vector<std::string>& bands, DemComputeResult& result)
+{
+    const InvariantsOptions& asked = options.compute.invariants;
+    const RasterGeoreference& grid = source.info().georeference;
+    const std::array<double, 6>& t = grid.transform;
+    WindowLayout w;
+    w.heightField = true;
+    w.width = grid.width, w.height = grid.height;
+    w.options = options.compute;
+    if (w.options.maxHolePerimeter < 0) w.options.maxHolePerimeter = defaultMaxHolePerimeter(asked.radius);
+    w.cell = shortestCellStep(grid);
+    HeightFieldOptions& k = w.kernel;
+    k.radii = equidistantRadii(asked.radius, asked.scales);
+    k.cellWidth = std::hypot(t[1], t[4]), k.cellHeight = std::hypot(t[2], t[5]);
+    k.computeVolume = asked.computeVolume, k.computeSphere = asked.computeSphere;
+    // The radii the bands need: those named; R for quality; every one for valid_radii, and
+    // for quality where balls are masked (the largest with a value).
+    const std::size_t n = k.radii.size();
+    std::vector<bool> wanted(n, false);
+    for (const std::string& name : bands) {
+        if (name == "valid_radii" || (name == "quality" && w.options.border == BorderHandling::Mask))
+            wanted.assign(n, true);
+        else if (name == "quality")
+            wanted[n - 1] = true;
+        else if (name.size() > 2 && name[1] == '_' && (name[0] == 'V' || name[0] == 'S'))
+            wanted[std::size_t(std::stoi(name.substr(2)) - 1)] = true;
+    }
+    for (std::size_t j = 0; j < n; ++j)
+        if (wanted[j]) k.wanted.push_back(int(j));
+    if (k.wanted.empty()) k.wanted.push_back(int(n - 1));  // height or filled_share alone
+    GridContinuationOptions& c = w.continuation;
+    c.cellWidth = k.cellWidth, c.cellHeight = k.cellHeight;
+    c.maxHolePerimeter = w.options.maxHolePerimeter;
+    c.continueBorders = w.options.border == BorderHandling::Continue;
+    const int reach = int(std::ceil(asked.radius * (1 + kHeightFieldSphereStep) / std::min(k.cellWidth, k.cellHeight))) + 2;
+    c.margin = reach;
+    c.fitRadius = std::max(0.25 * asked.radius, 3 * w.cell);
+    w.region = {0, 0, w.width, w.height};
+    if (options.region.cols > 0) {
+        const RasterRegion& g = options.region;
+        if (g.col < 0 || g.row < 0 || g.rows < 1 || g.col + g.cols > w.width || g.row + g.rows > w.height)
+            throw InvalidInputError("the region to compute lies outside the raster");
+        w.region = g;
+    }
+    result.plan.radii = k.radii;
+    // Own cells per window: 2048² cells take about 0.2 GB with their halos and bands.
+    constexpr int kSide = 2048;
+    const int side = options.windowCells > 0 ? options.windowCells : kSide;
+    w.oneWindow = options.region.cols == 0 && std::max(w.width, w.height) <= side;
+    w.side = std::max(w.width, w.height);
+    if (w.oneWindow) return w;
+    w.side = side;
+    w.narrowHalo = reach;
+    const int fillHalo = reach + int(std::ceil(0.5 * c.maxHolePerimeter / w.cell)) + 1;
+    w.wideHalo = fillHalo;
+    // A hole near the box's edge that the whole raster fills, read whole too: the
+    // continuation's heights depend on it.
+    if (c.continueBorders) w.wideHalo = fillHalo + 2 * reach + int(std::ceil(c.fitRadius / w.cell)) + 1;
     return w;
 }
 
@@ -400,6 +477,105 @@ std::vector<std::vector<float>> computeWindow(const Window& win, const WindowLay
     return bandsOf(win, dm, r, result.bands);
 }
 
+/// Computes window @p win on the height-field route: the box's gaps filled and its borders
+/// continued on the grid, V and S of its own cells from the heights, filled_share from the
+/// same hat weights at R. Adds its diagnostics, masked own cells and time to @p result;
+/// returns its bands per cell of its box (NaN outside the own cells).
+std::vector<std::vector<float>> computeHeightWindow(const Window& win, const WindowLayout& w, DiagnosticSum& diagnostics,
+                                                    DemComputeResult& result, RunContext* context)
+{
+    const int bw = win.box[2] - win.box[0], bh = win.box[3] - win.box[1];
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    std::vector<std::vector<float>> cells(result.bands.size(), std::vector<float>(std::size_t(bw) * std::size_t(bh), nan));
+    if (win.dem.numValid == 0) return cells;
+    Stopwatch clock;
+    HeightGrid heights;
+    heights.cols = bw, heights.rows = bh, heights.z = win.dem.heights;
+    const GridContinuationResult g = continueGrid(heights, w.continuation);
+    const int m = w.continuation.margin;
+    const GridRect own{win.col - win.box[0] + m, win.row - win.box[1] + m, win.cols, win.rows};
+    result.prepareSeconds += clock.seconds();
+    const HeightFieldResult hf = computeHeightField(g.grid, own, w.kernel, context);
+    result.heightFieldSeconds += hf.seconds;
+    clock.restart();
+    // An own cell with a height is on the surface where one of its four squares has four
+    // heights of the DEM's, as a vertex of the DEM's mesh is in a face (a filled hole adds
+    // faces only between the heights on its rim). filled_share: the area of the squares
+    // inside the ball at R with a filled or continued corner, over πR², as the mesh's fill
+    // and skirt (docs/method.md, Filled share).
+    const std::size_t nOwn = std::size_t(win.cols) * std::size_t(win.rows);
+    const auto kindAt = [&](int c, int r) {
+        if (c < 0 || r < 0 || c >= g.grid.cols || r >= g.grid.rows) return GridCell::None;
+        return g.kind[std::size_t(r) * std::size_t(g.grid.cols) + std::size_t(c)];
+    };
+    const auto given = [&](int c, int r) {
+        return kindAt(c, r) == GridCell::Height && kindAt(c + 1, r) == GridCell::Height &&
+               kindAt(c, r + 1) == GridCell::Height && kindAt(c + 1, r + 1) == GridCell::Height;
+    };
+    const auto added = [&](int c, int r) {
+        for (const auto& [dx, dy] : {std::pair{0, 0}, std::pair{1, 0}, std::pair{0, 1}, std::pair{1, 1}}) {
+            const GridCell k = kindAt(c + dx, r + dy);
+            if (k == GridCell::Filled || k == GridCell::Continued) return true;
+        }
+        return false;
+    };
+    std::vector<float> filledShare(nOwn, nan);
+    std::vector<std::uint32_t> inFace;
+    std::size_t squares = 0;
+    const bool wantsShare = std::find(result.bands.begin(), result.bands.end(), "filled_share") != result.bands.end();
+    const DiscSquares disc =
+        wantsShare ? discSquares(w.kernel.radii.back(), w.kernel.cellWidth, w.kernel.cellHeight) : DiscSquares();
+    const double discArea = 3.14159265358979323846 * w.kernel.radii.back() * w.kernel.radii.back();
+    for (int y = 0; y < win.rows; ++y)
+        for (int x = 0; x < win.cols; ++x) {
+            const int c = own.col + x, r = own.row + y;
+            if (kindAt(c, r) != GridCell::Height) continue;
+            squares += given(c, r);
+            if (!given(c, r) && !given(c - 1, r) && !given(c, r - 1) && !given(c - 1, r - 1)) continue;
+            const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x);
+            inFace.push_back(std::uint32_t(k));
+            double share = 0;
+            for (std::size_t i = 0; i < disc.area.size(); ++i)
+                if (added(c + disc.column[i], r + disc.row[i])) share += disc.area[i];
+            filledShare[k] = float(std::min(1.0, share / discArea));
+        }
+    result.triangles += 2 * squares;
+    FeatureSet features;
+    features.radii = w.kernel.radii;
+    if (!hf.volume.empty()) features[Invariant::Volume] = hf.volume;
+    if (!hf.sphere.empty()) features[Invariant::Sphere] = hf.sphere;
+    std::vector<VertexProperty> props = outputProperties(features, filledShare);
+    for (VertexProperty& p : props)
+        for (std::size_t k = 0; k < nOwn; ++k)
+            if (std::isnan(filledShare[k])) p.values[k] = nan;  // not on the surface
+    result.masked.add(features, filledShare, inFace);
+    for (std::size_t b = 0; b < result.bands.size(); ++b) {
+        const std::string& name = result.bands[b];
+        const auto p = std::find_if(props.begin(), props.end(), [&](const VertexProperty& q) { return q.name == name; });
+        for (int y = 0; y < win.rows; ++y)
+            for (int x = 0; x < win.cols; ++x) {
+                const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x), at = win.boxCell(win.col + x, win.row + y);
+                cells[b][at] = name == "height" ? win.dem.heights[at] : p->values[k];
+            }
+    }
+    if (g.gapsFilled > 0) {
+        std::ostringstream msg;
+        msg.precision(3);
+        msg << "filled " << g.gapsFilled << (g.gapsFilled == 1 ? " hole" : " holes") << " (nodata gaps)"
+            << " for the computation (the longest " << g.largestFilledPerimeter << " around, " << g.cellsFilled
+            << " cells); values near them rest partly on the filled surface (filled_share)";
+        diagnostics.add({"holes_filled", g.gapsFilled, {{"largest_perimeter", g.largestFilledPerimeter}}, msg.str()});
+    }
+    if (g.cellsContinued > 0) {
+        std::ostringstream msg;
+        msg << "continued the surface past the DEM's edge and the gaps too large to fill for the computation, "
+            << m << " cells wide; values within R of them rest partly on the continuation (filled_share)";
+        diagnostics.add({"borders_continued", g.cellsContinued, {{"width", m * w.cell}}, msg.str()});
+    }
+    result.prepareSeconds += clock.seconds();
+    return cells;
+}
+
 /// Copies the own cells of @p cells (per cell of the window's box) into the output.
 void writeOwnCells(const Window& win, const RasterRegion& region, const std::vector<std::vector<float>>& cells,
                    RasterPieceWriter& writer)
@@ -456,7 +632,8 @@ public:
             throw InvalidInputError(fileName(mInput) + " has no cell with a height (all nodata)");
         std::vector<std::vector<float>> cells;
         try {
-            cells = computeWindow(win, mW, totals.diagnostics, mResult, mContext);
+            cells = mW.heightField ? computeHeightWindow(win, mW, totals.diagnostics, mResult, mContext)
+                                   : computeWindow(win, mW, totals.diagnostics, mResult, mContext);
         } catch (const MemoryLimitError& e) {
             if (mW.oneWindow) throw;  // computeDem lays the raster out in windows and retries
             if (std::max(own.cols, own.rows) <= std::max(1, mW.narrowHalo)) {
@@ -561,7 +738,14 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
     ro.band = options.band;
     const DemSource source(input, ro);
     result.input = source.info();
-    const WindowLayout w = layWindows(source, input, options, result);
+    const InvariantsOptions& computed = options.compute.invariants;
+    result.engine = asked.engine;
+    if (asked.engine == DemEngine::HeightField && (computed.computePatch || computed.computeLine)) {
+        result.engine = DemEngine::Mesh;
+        result.engineNote = "P and L are computed on the DEM's mesh (the height-field kernel gives V and S)";
+    }
+    const WindowLayout w = result.engine == DemEngine::HeightField ? layHeightFieldWindows(source, options, bands, result)
+                                                                   : layWindows(source, input, options, result);
     result.bands = bands;
     result.computed = options.compute.invariants.selected();
     result.scaled16 = options.output.scaled16;

@@ -24,6 +24,16 @@
 
 namespace msii {
 
+/// How a DEM's V and S are computed (docs/terrain.md, Engines).
+enum class DemEngine {
+    /// Straight from the heights, without a level set (terrain/height_field.h), the raster's
+    /// small gaps filled and its borders continued on the grid (terrain/grid_continuation.h).
+    /// A run that needs P or L takes the mesh route instead, and its record says so.
+    HeightField,
+    /// The DEM's mesh through the level set, as a scan (pipeline/compute.h).
+    Mesh,
+};
+
 struct DemComputeOptions {
     /// What each window runs (pipeline/compute.h): radius, scales, precision, which
     /// invariants (not exact); nodata gaps are holes, filled up to maxHolePerimeter (-1: πR).
@@ -46,6 +56,7 @@ struct DemComputeOptions {
     /// (RasterOutputOptions::scaled16: a resolution of 1.5e-5, a third of the size).
     bool float32 = false;
     RasterOutputOptions output;     ///< description and metadata of the output raster
+    DemEngine engine = DemEngine::HeightField;
 };
 
 /// The names of the bands a DEM computation with @p options can write, for parseFeatureNames
@@ -75,6 +86,11 @@ struct DemComputeResult {
     MaskedValues masked;           ///< over the own cells in a face of all windows
     InvariantsCost cost;           ///< summed over the windows
     double readSeconds = 0, prepareSeconds = 0, writeSeconds = 0;
+    /// The route taken, and why it is not the one asked for (P or L asked from the height
+    /// field), empty if it is.
+    DemEngine engine = DemEngine::HeightField;
+    std::string engineNote;
+    double heightFieldSeconds = 0;  ///< the kernel's, summed over the windows
 };
 
 /// Computes the invariants of the DEM @p input and writes the chosen features to @p output,

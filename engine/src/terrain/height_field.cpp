@@ -1,0 +1,517 @@
+#include <msii/terrain/height_field.h>
+
+#include <msii/core/errors.h>
+#include <msii/core/stopwatch.h>
+#include <msii/invariants/scales.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <vector>
+
+namespace msii {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kSphereStep = kHeightFieldSphereStep;
+/// Pieces of cells across a disc's radius, at least: fewer, and the pieces' heights (their
+/// centres') miss the terrain's bends within them (docs/method.md, Height fields).
+constexpr double kDiscPieces = 40;
+
+/// ∫ from y0 to y1 of √(a² − y²) dy (|y0|, |y1| <= a): ½(y √(a² − y²) + a² asin(y/a)).
+double chordIntegral(double a2, double y0, double y1)
+{
+    const double a = std::sqrt(a2);
+    const auto f = [&](double y) {
+        const double t = std::clamp(y / a, -1.0, 1.0);
+        return 0.5 * (y * std::sqrt(std::max(0.0, a2 - y * y)) + a2 * std::asin(t));
+    };
+    return f(y1) - f(y0);
+}
+
+/// What the column x adds to a cell's A and H: the length of [y0, y1] within the disc,
+/// and the integral of h over it.
+struct Column {
+    double length = 0, integral = 0;
+};
+Column columnAt(double r2, double x, double y0, double y1)
+{
+    const double a2 = r2 - x * x;
+    if (!(a2 > 0)) return {};
+    const double a = std::sqrt(a2), lo = std::max(y0, -a), hi = std::min(y1, a);
+    if (!(hi > lo)) return {};
+    return {hi - lo, chordIntegral(a2, lo, hi)};
+}
+
+/// ∫ from x0 to x1 of columnAt by adaptive Simpson's rule (the integrand has square-root
+/// ends where the disc's rim crosses the cell).
+struct Simpson {
+    double r2, y0, y1, tolerance;
+    Column operator()(double x0, double x1) const
+    {
+        const Column f0 = columnAt(r2, x0, y0, y1), f1 = columnAt(r2, x1, y0, y1),
+                     fm = columnAt(r2, 0.5 * (x0 + x1), y0, y1);
+        return refine(x0, x1, f0, fm, f1, whole(x0, x1, f0, fm, f1), 0);
+    }
+
+private:
+    static Column whole(double x0, double x1, const Column& f0, const Column& fm, const Column& f1)
+    {
+        const double w = (x1 - x0) / 6;
+        return {w * (f0.length + 4 * fm.length + f1.length), w * (f0.integral + 4 * fm.integral + f1.integral)};
+    }
+    Column refine(double x0, double x1, const Column& f0, const Column& fm, const Column& f1, const Column& estimate,
+                  int depth) const
+    {
+        const double xm = 0.5 * (x0 + x1);
+        const Column fl = columnAt(r2, 0.5 * (x0 + xm), y0, y1), fr = columnAt(r2, 0.5 * (xm + x1), y0, y1);
+        const Column left = whole(x0, xm, f0, fl, fm), right = whole(xm, x1, fm, fr, f1);
+        const double change = std::abs(left.integral + right.integral - estimate.integral) +
+                              std::abs(left.length + right.length - estimate.length);
+        if (depth >= 24 || change <= 15 * tolerance)
+            return {left.length + right.length + (left.length + right.length - estimate.length) / 15,
+                    left.integral + right.integral + (left.integral + right.integral - estimate.integral) / 15};
+        const Column a = refine(x0, xm, f0, fl, fm, left, depth + 1), b = refine(xm, x1, fm, fr, f1, right, depth + 1);
+        return {a.length + b.length, a.integral + b.integral};
+    }
+};
+
+} // namespace
+
+int discSplit(double r, double cellWidth, double cellHeight)
+{
+    const double cell = std::max(cellWidth, cellHeight);
+    return std::max(1, int(std::ceil(kDiscPieces * cell / r)));
+}
+
+namespace {
+
+/// The area of [x0, x1] × [y0, y1] inside the disc of radius² @p r2 about the origin, and the
+/// integral of h over it.
+Column inDisc(double r2, double x0, double x1, double y0, double y1)
+{
+    const double nearX = x0 > 0 ? x0 : (x1 < 0 ? -x1 : 0), nearY = y0 > 0 ? y0 : (y1 < 0 ? -y1 : 0);
+    if (nearX * nearX + nearY * nearY >= r2) return {};
+    x0 = std::max(x0, -std::sqrt(r2)), x1 = std::min(x1, std::sqrt(r2));
+    // Split at the columns where the rim crosses y0 or y1, so that each part is smooth inside
+    // and square-root-like at most at its ends.
+    double cuts[6] = {x0, x1};
+    int n = 2;
+    for (const double y : {y0, y1})
+        if (y * y < r2)
+            for (const double sign : {-1.0, 1.0}) {
+                const double x = sign * std::sqrt(r2 - y * y);
+                if (x > x0 && x < x1 && n < 6) cuts[n++] = x;
+            }
+    for (int i = 1; i < n; ++i)  // insertion sort of at most six
+        for (int k = i; k > 0 && cuts[k] < cuts[k - 1]; --k) std::swap(cuts[k], cuts[k - 1]);
+    const Simpson simpson{r2, y0, y1, 1e-9 * (x1 - x0) * (y1 - y0) * std::sqrt(r2)};
+    Column total;
+    for (int k = 0; k + 1 < n; ++k) {
+        const Column part = simpson(cuts[k], cuts[k + 1]);
+        total.length += part.length, total.integral += part.integral;
+    }
+    return total;
+}
+
+/// The area of [x0, x1] × [y0, y1] inside the disc of radius² @p r2 about the origin, in closed
+/// form: between the columns where the rim crosses y0 or y1, the column's length inside is
+/// (y1 or √(r² − x²)) − (y0 or −√(r² − x²)), and ∫ √(r² − x²) dx = chordIntegral.
+double areaInDisc(double r2, double x0, double x1, double y0, double y1)
+{
+    const double nearX = x0 > 0 ? x0 : (x1 < 0 ? -x1 : 0), nearY = y0 > 0 ? y0 : (y1 < 0 ? -y1 : 0);
+    if (nearX * nearX + nearY * nearY >= r2) return 0;
+    const double farX = std::max(std::abs(x0), std::abs(x1)), farY = std::max(std::abs(y0), std::abs(y1));
+    if (farX * farX + farY * farY <= r2) return (x1 - x0) * (y1 - y0);
+    x0 = std::max(x0, -std::sqrt(r2)), x1 = std::min(x1, std::sqrt(r2));
+    double cuts[6] = {x0, x1};
+    int n = 2;
+    for (const double y : {y0, y1})
+        if (y * y < r2)
+            for (const double sign : {-1.0, 1.0}) {
+                const double x = sign * std::sqrt(r2 - y * y);
+                if (x > x0 && x < x1 && n < 6) cuts[n++] = x;
+            }
+    for (int i = 1; i < n; ++i)  // insertion sort of at most six
+        for (int k = i; k > 0 && cuts[k] < cuts[k - 1]; --k) std::swap(cuts[k], cuts[k - 1]);
+    double area = 0;
+    for (int k = 0; k + 1 < n; ++k) {
+        const double p = cuts[k], q = cuts[k + 1], mid = 0.5 * (p + q), a = std::sqrt(std::max(0.0, r2 - mid * mid));
+        if (std::min(y1, a) <= std::max(y0, -a)) continue;
+        const double rim = chordIntegral(r2, p, q);  // ∫ √(r² − x²) over [p, q]
+        area += (y1 < a ? y1 * (q - p) : rim) - (y0 > -a ? y0 * (q - p) : -rim);
+    }
+    return area;
+}
+
+/// Parts per side of a square of four cell centres that the rim cuts, for its hat integrals
+/// (even: the square's diagonal runs along the parts' corners).
+constexpr int kRimParts = 64;
+
+/// W_o of every cell o for the disc of radius @p r: whole triangles in closed form (a hat
+/// function's integral over a triangle of its vertex is a third of its area), the squares the
+/// rim cuts in kRimParts² parts, each part's area in the disc at its centre's hat values.
+std::map<std::pair<int, int>, double> hatIntegrals(double r, double cw, double ch)
+{
+    std::map<std::pair<int, int>, double> w;
+    const double r2 = r * r, cell = cw * ch;
+    const int reachX = int(std::ceil(r / cw)), reachY = int(std::ceil(r / ch));
+    for (int rw = -reachY - 1; rw <= reachY; ++rw)
+        for (int c = -reachX - 1; c <= reachX; ++c) {
+            const double x0 = c * cw, x1 = x0 + cw, y0 = rw * ch, y1 = y0 + ch;
+            const double farX = std::max(std::abs(x0), std::abs(x1)), farY = std::max(std::abs(y0), std::abs(y1));
+            // The square's corners (c, rw), (c + 1, rw), (c, rw + 1), (c + 1, rw + 1) and
+            // its triangles (c, rw), (c + 1, rw), (c, rw + 1) and the other three.
+            double& w00 = w[{c, rw}];
+            double& w10 = w[{c + 1, rw}];
+            double& w01 = w[{c, rw + 1}];
+            double& w11 = w[{c + 1, rw + 1}];
+            if (farX * farX + farY * farY <= r2) {
+                w00 += cell / 6, w11 += cell / 6, w10 += cell / 3, w01 += cell / 3;
+                continue;
+            }
+            const double pw = cw / kRimParts, ph = ch / kRimParts;
+            const auto add = [&](double a, double u, double v) {
+                if (u + v <= 1)
+                    w00 += a * (1 - u - v), w10 += a * u, w01 += a * v;
+                else
+                    w11 += a * (u + v - 1), w10 += a * (1 - v), w01 += a * (1 - u);
+            };
+            for (int j = 0; j < kRimParts; ++j)
+                for (int i = 0; i < kRimParts; ++i) {
+                    const double a = areaInDisc(r2, x0 + i * pw, x0 + (i + 1) * pw, y0 + j * ph, y0 + (j + 1) * ph);
+                    if (!(a > 0)) continue;
+                    if (i + j + 1 == kRimParts) {  // the diagonal halves the part
+                        add(0.5 * a, (i + 1.0 / 3) / kRimParts, (j + 1.0 / 3) / kRimParts);
+                        add(0.5 * a, (i + 2.0 / 3) / kRimParts, (j + 2.0 / 3) / kRimParts);
+                    } else {
+                        add(a, (i + 0.5) / kRimParts, (j + 0.5) / kRimParts);
+                    }
+                }
+        }
+    return w;
+}
+
+} // namespace
+
+DiscSquares discSquares(double r, double cellWidth, double cellHeight)
+{
+    DiscSquares squares;
+    const int reachX = int(std::ceil(r / cellWidth)), reachY = int(std::ceil(r / cellHeight));
+    for (int rw = -reachY - 1; rw <= reachY; ++rw)
+        for (int c = -reachX - 1; c <= reachX; ++c) {
+            const double a = areaInDisc(r * r, c * cellWidth, (c + 1) * cellWidth, rw * cellHeight, (rw + 1) * cellHeight);
+            if (!(a > 0)) continue;
+            squares.column.push_back(c), squares.row.push_back(rw), squares.area.push_back(a);
+        }
+    return squares;
+}
+
+DiscSamples discSamples(double r, double cellWidth, double cellHeight, int split)
+{
+    DiscSamples disc;
+    disc.radius = r;
+    disc.split = split;
+    int reach = 0;
+    for (const auto& [cell, weight] : hatIntegrals(r, cellWidth, cellHeight))
+        if (weight > 0) {
+            disc.cellColumn.push_back(cell.first);
+            disc.cellRow.push_back(cell.second);
+            disc.cellWeight.push_back(float(weight));
+            reach = std::max({reach, std::abs(cell.first), std::abs(cell.second)});
+        }
+    struct Piece {
+        float area, meanHalfChord;
+        int col[3], row[3];
+        float w[3];
+    };
+    std::vector<Piece> pieces;
+    const double r2 = r * r, pw = cellWidth / split, ph = cellHeight / split;
+    const int reachY = int(std::ceil(r / cellHeight + 0.5)), reachX = int(std::ceil(r / cellWidth + 0.5));
+    for (int dy = -reachY; dy <= reachY; ++dy)
+        for (int b = 0; b < split; ++b) {
+            const double y0 = (dy - 0.5) * cellHeight + b * ph, y1 = y0 + ph;
+            for (int dx = -reachX; dx <= reachX; ++dx)
+                for (int a = 0; a < split; ++a) {
+                    const double x0 = (dx - 0.5) * cellWidth + a * pw, x1 = x0 + pw;
+                    const Column total = inDisc(r2, x0, x1, y0, y1);
+                    if (!(total.length > 1e-12 * pw * ph)) continue;
+                    Piece piece;
+                    piece.area = float(total.length);
+                    piece.meanHalfChord = float(total.integral / total.length);
+                    // The piece's centre in cells from the centre cell, and the DEM's
+                    // triangle under it: corners (c, r), (c + 1, r), (c, r + 1) where
+                    // u + v <= 1, else (c + 1, r + 1), (c + 1, r), (c, r + 1).
+                    const double px = dx - 0.5 + (a + 0.5) / split, py = dy - 0.5 + (b + 0.5) / split;
+                    const int c = int(std::floor(px)), rr = int(std::floor(py));
+                    const double u = px - c, v = py - rr;
+                    if (u + v <= 1) {
+                        piece.col[0] = c, piece.row[0] = rr, piece.w[0] = float(1 - u - v);
+                        piece.col[1] = c + 1, piece.row[1] = rr, piece.w[1] = float(u);
+                        piece.col[2] = c, piece.row[2] = rr + 1, piece.w[2] = float(v);
+                    } else {
+                        piece.col[0] = c + 1, piece.row[0] = rr + 1, piece.w[0] = float(u + v - 1);
+                        piece.col[1] = c + 1, piece.row[1] = rr, piece.w[1] = float(1 - v);
+                        piece.col[2] = c, piece.row[2] = rr + 1, piece.w[2] = float(1 - u);
+                    }
+                    for (int t = 0; t < 3; ++t) reach = std::max({reach, std::abs(piece.col[t]), std::abs(piece.row[t])});
+                    pieces.push_back(piece);
+                }
+        }
+    std::stable_sort(pieces.begin(), pieces.end(),
+                     [](const Piece& p, const Piece& q) { return p.meanHalfChord < q.meanHalfChord; });
+    for (const Piece& piece : pieces) {
+        disc.area.push_back(piece.area);
+        disc.meanHalfChord.push_back(piece.meanHalfChord);
+        for (std::size_t t = 0; t < 3; ++t) {
+            disc.tapColumn[t].push_back(piece.col[t]);
+            disc.tapRow[t].push_back(piece.row[t]);
+            disc.tapWeight[t].push_back(piece.w[t]);
+        }
+    }
+    disc.reach = reach;
+    return disc;
+}
+
+namespace {
+
+/// Lanes of cells computed together: consecutive cells of a row read consecutive heights.
+constexpr int kLanes = 8;
+
+/// Eight floats, one per lane (GCC's vector extension: AVX2 registers in the AVX2 clone, two
+/// SSE registers in the default one).
+typedef float Lanes __attribute__((vector_size(32)));
+typedef int LaneMask __attribute__((vector_size(32)));
+static_assert(kLanes == 8, "Lanes holds eight cells");
+
+// The helpers return vectors in registers: always inlined, in both clones, so the ABI of a
+// vector return (which -Wpsabi warns of, engine/CMakeLists.txt) never applies.
+#define MSII_LANES inline __attribute__((always_inline))
+MSII_LANES Lanes loadLanes(const float* p)
+{
+    Lanes v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+MSII_LANES Lanes broadcast(float x) { return Lanes{x, x, x, x, x, x, x, x}; }
+MSII_LANES Lanes maxLanes(Lanes a, Lanes b) { return a > b ? a : b; }
+MSII_LANES Lanes minLanes(Lanes a, Lanes b) { return a < b ? a : b; }
+MSII_LANES Lanes absLanes(Lanes a) { return Lanes(LaneMask(a) & 0x7fffffff); }
+
+/// A disc's taps as offsets into the padded grid of row stride s (row · s + column).
+struct DiscOffsets {
+    std::vector<std::ptrdiff_t> cell;
+    std::array<std::vector<std::ptrdiff_t>, 3> piece;
+};
+DiscOffsets offsetsOf(const DiscSamples& d, std::ptrdiff_t stride)
+{
+    DiscOffsets o;
+    for (std::size_t i = 0; i < d.cellWeight.size(); ++i) o.cell.push_back(d.cellRow[i] * stride + d.cellColumn[i]);
+    for (std::size_t t = 0; t < 3; ++t)
+        for (std::size_t i = 0; i < d.size(); ++i) o.piece[t].push_back(d.tapRow[t][i] * stride + d.tapColumn[t][i]);
+    return o;
+}
+
+/// For kLanes consecutive cells (lane k at column offset k) at heights @p z0, V(r) − ⅔πr³ of
+/// the disc @p d added to @p sums: Σ_o W_o (z_o − z₀) over the taps, then C over the pieces
+/// whose h̄ is at most the lane's largest |z_o − z₀| (a piece past it has |z − z₀| < h̄: no
+/// clamp, nothing to add; the sum of each lane depends on its own cells only, so that a cell
+/// gets the same value in every block, window and tile). @p z points at the first lane's cell
+/// in the padded grid of @p at's offsets. Compiled for AVX2 as well (chosen at run time).
+__attribute__((target_clones("avx2", "default"))) void sumDisc(const float* z, const DiscOffsets& at,
+                                                              const float* z0lanes, const DiscSamples& d,
+                                                              float* sums)
+{
+    const Lanes z0 = loadLanes(z0lanes);
+    Lanes reach = broadcast(0), total = broadcast(0);
+    const std::size_t taps = d.cellWeight.size();
+    for (std::size_t i = 0; i < taps; ++i) {
+        const Lanes dz = loadLanes(z + at.cell[i]) - z0;
+        total += broadcast(d.cellWeight[i]) * dz;
+        reach = maxLanes(reach, absLanes(dz));
+    }
+    float most = 0;
+    for (int k = 0; k < kLanes; ++k) most = std::max(most, reach[k]);
+    const std::size_t n = d.size();
+    for (std::size_t i = 0; i < n && d.meanHalfChord[i] <= most; ++i) {
+        const Lanes h = broadcast(d.meanHalfChord[i]);
+        const Lanes below = broadcast(d.tapWeight[0][i]) * loadLanes(z + at.piece[0][i]) +
+                            broadcast(d.tapWeight[1][i]) * loadLanes(z + at.piece[1][i]) +
+                            broadcast(d.tapWeight[2][i]) * loadLanes(z + at.piece[2][i]) - z0 + h;
+        const Lanes clamped = minLanes(maxLanes(below, broadcast(0)), h + h) - below;
+        total += h <= reach ? broadcast(d.area[i]) * clamped : broadcast(0);
+    }
+    Lanes out = loadLanes(sums) + total;
+    std::memcpy(sums, &out, sizeof out);
+}
+
+/// What one cell of the own rectangle needs: whether every cell of its largest ball has a
+/// height (a count of those without, over the square around the ball).
+class HeightCoverage {
+public:
+    explicit HeightCoverage(const HeightGrid& g) : mCols(g.cols), mMissing(std::size_t(g.cols + 1) * (g.rows + 1), 0)
+    {
+        for (int r = 0; r < g.rows; ++r)
+            for (int c = 0; c < g.cols; ++c)
+                at(c + 1, r + 1) = at(c, r + 1) + at(c + 1, r) - at(c, r) + (std::isnan(g.at(c, r)) ? 1 : 0);
+    }
+    /// Whether every cell within @p reach columns and rows of (col, row) exists and has a height.
+    bool complete(int col, int row, int reach, int rows) const
+    {
+        const int c0 = col - reach, c1 = col + reach + 1, r0 = row - reach, r1 = row + reach + 1;
+        if (c0 < 0 || r0 < 0 || c1 > mCols || r1 > rows) return false;
+        return at(c1, r1) - at(c0, r1) - at(c1, r0) + at(c0, r0) == 0;
+    }
+
+private:
+    std::int64_t& at(int c, int r) { return mMissing[std::size_t(r) * std::size_t(mCols + 1) + std::size_t(c)]; }
+    std::int64_t at(int c, int r) const { return mMissing[std::size_t(r) * std::size_t(mCols + 1) + std::size_t(c)]; }
+    int mCols;
+    std::vector<std::int64_t> mMissing;
+};
+
+/// The radii at which V is summed: V's wanted radii, and r(1 ± kSphereStep) for Ŝ's.
+struct SumRadii {
+    std::vector<double> radius;
+    std::vector<int> volumeOf, belowOf, aboveOf;  ///< per radius j: its index, or −1
+};
+
+SumRadii sumRadii(const HeightFieldOptions& o)
+{
+    SumRadii s;
+    const std::size_t n = o.radii.size();
+    s.volumeOf.assign(n, -1), s.belowOf.assign(n, -1), s.aboveOf.assign(n, -1);
+    const auto add = [&](double r) {
+        s.radius.push_back(r);
+        return int(s.radius.size()) - 1;
+    };
+    for (std::size_t j = 0; j < n; ++j) {
+        const bool wanted = o.wanted.empty() || std::find(o.wanted.begin(), o.wanted.end(), int(j)) != o.wanted.end();
+        if (!wanted) continue;
+        if (o.computeVolume) s.volumeOf[j] = add(o.radii[j]);
+        if (o.computeSphere) {
+            s.belowOf[j] = add(o.radii[j] * (1 - kSphereStep));
+            s.aboveOf[j] = add(o.radii[j] * (1 + kSphereStep));
+        }
+    }
+    return s;
+}
+
+void validate(const HeightGrid& grid, const GridRect& own, const HeightFieldOptions& o)
+{
+    validateRadii(o.radii);
+    if (!(o.cellWidth > 0) || !(o.cellHeight > 0) || !std::isfinite(o.cellWidth) || !std::isfinite(o.cellHeight))
+        throw InvalidInputError("the cell size must be positive");
+    if (own.col < 0 || own.row < 0 || own.col + own.cols > grid.cols || own.row + own.rows > grid.rows)
+        throw InvalidInputError("the cells to compute lie outside the height grid");
+    if (grid.z.size() != std::size_t(grid.cols) * std::size_t(grid.rows))
+        throw InvalidInputError("the height grid's size does not match its columns and rows");
+}
+
+} // namespace
+
+HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own, const HeightFieldOptions& options,
+                                     RunContext* context)
+{
+    validate(grid, own, options);
+    const Stopwatch clock;
+    HeightFieldResult result;
+    result.radii = options.radii;
+    const std::size_t n = options.radii.size(), cells = std::size_t(own.cols) * std::size_t(own.rows);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    if (options.computeVolume) result.volume.assign(n, std::vector<float>(cells, nan));
+    if (options.computeSphere) result.sphere.assign(n, std::vector<float>(cells, nan));
+    const SumRadii sums = sumRadii(options);
+    if (sums.radius.empty() || cells == 0) return result;
+    std::vector<DiscSamples> discs(sums.radius.size());
+    tbb::parallel_for(std::size_t(0), discs.size(), [&](std::size_t k) {
+        const double r = sums.radius[k];
+        discs[k] = discSamples(r, options.cellWidth, options.cellHeight, discSplit(r, options.cellWidth, options.cellHeight));
+    });
+    int reach = 0;
+    for (const DiscSamples& d : discs) reach = std::max(reach, d.reach);
+    const HeightCoverage coverage(grid);
+    // The heights with kLanes columns more on the right, so that a block of lanes past the
+    // own cells' last reads within the grid (those lanes are not used).
+    const std::ptrdiff_t stride = grid.cols + kLanes;
+    std::vector<float> padded(std::size_t(stride) * std::size_t(grid.rows), 0.0f);
+    for (int row = 0; row < grid.rows; ++row)
+        std::copy_n(&grid.z[std::size_t(row) * std::size_t(grid.cols)], grid.cols, &padded[std::size_t(row) * std::size_t(stride)]);
+
+    std::vector<DiscOffsets> offsets;
+    for (const DiscSamples& d : discs) offsets.push_back(offsetsOf(d, stride));
+    if (context) context->start("V and S from the heights", std::size_t(own.rows));
+    tbb::parallel_for(tbb::blocked_range<int>(0, own.rows), [&](const tbb::blocked_range<int>& range) {
+        std::vector<float> volume(sums.radius.size() * kLanes);
+        std::vector<char> complete(discs.size() * kLanes);
+        for (int r = range.begin(); r < range.end(); ++r) {
+            const int row = own.row + r;
+            for (int c = 0; c < own.cols; c += kLanes) {
+                const int lanes = std::min(kLanes, own.cols - c);
+                // Per disc and lane: whether every cell the disc reads has a height.
+                float z0[kLanes];
+                bool all = true, any = false;
+                for (std::size_t s = 0; s < discs.size(); ++s)
+                    for (int k = 0; k < kLanes; ++k) {
+                        const bool ok = k < lanes && coverage.complete(own.col + c + k, row, discs[s].reach, grid.rows);
+                        complete[s * kLanes + std::size_t(k)] = ok;
+                        all = all && (ok || k >= lanes);
+                        any = any || ok;
+                    }
+                if (!any) continue;
+                for (int k = 0; k < kLanes; ++k) z0[k] = k < lanes ? grid.at(own.col + c + k, row) : 0.0f;
+                std::fill(volume.begin(), volume.end(), 0.0f);
+                const float* at = &padded[std::size_t(row) * std::size_t(stride) + std::size_t(own.col + c)];
+                const bool inside = all && own.col + c - reach >= 0 && own.col + c + reach < grid.cols && row - reach >= 0 &&
+                                    row + reach < grid.rows;
+                for (std::size_t s = 0; s < discs.size(); ++s) {
+                    if (inside) {
+                        sumDisc(at, offsets[s], z0, discs[s], &volume[s * kLanes]);
+                        continue;
+                    }
+                    // Near the grid's edge or a gap: each lane whose disc is complete alone, as
+                    // lane 0 of a block whose other lanes read its neighbours within the
+                    // padding, unused.
+                    for (int k = 0; k < lanes; ++k) {
+                        if (!complete[s * kLanes + std::size_t(k)]) continue;
+                        float one[kLanes] = {}, lane0[kLanes];
+                        std::fill(lane0, lane0 + kLanes, z0[k]);
+                        sumDisc(at + k, offsets[s], lane0, discs[s], one);
+                        volume[s * kLanes + std::size_t(k)] = one[0];
+                    }
+                }
+                const auto done = [&](int s, int k) { return s >= 0 && complete[std::size_t(s) * kLanes + std::size_t(k)]; };
+                for (int k = 0; k < lanes; ++k) {
+                    const std::size_t cell = std::size_t(r) * std::size_t(own.cols) + std::size_t(c + k);
+                    for (std::size_t j = 0; j < n; ++j) {
+                        const double rj = options.radii[j];
+                        if (done(sums.volumeOf[j], k))
+                            result.volume[j][cell] =
+                                float(0.5 + double(volume[std::size_t(sums.volumeOf[j]) * kLanes + std::size_t(k)]) /
+                                                (4.0 / 3.0 * kPi * rj * rj * rj));
+                        if (done(sums.belowOf[j], k) && done(sums.aboveOf[j], k)) {
+                            const double below = sums.radius[std::size_t(sums.belowOf[j])],
+                                         above = sums.radius[std::size_t(sums.aboveOf[j])];
+                            const double dv = double(volume[std::size_t(sums.aboveOf[j]) * kLanes + std::size_t(k)]) -
+                                              double(volume[std::size_t(sums.belowOf[j]) * kLanes + std::size_t(k)]);
+                            result.sphere[j][cell] =
+                                float(0.5 + dv / (4.0 / 3.0 * kPi * (above * above * above - below * below * below)));
+                        }
+                    }
+                }
+            }
+            if (context) context->advance();
+        }
+    });
+    if (context) context->end();
+    result.seconds = clock.seconds();
+    return result;
+}
+
+} // namespace msii
