@@ -87,7 +87,7 @@ private:
 int discSplit(double r, double cellWidth, double cellHeight)
 {
     const double cell = std::max(cellWidth, cellHeight);
-    return std::max(1, int(std::ceil(kDiscPieces * cell / r)));
+    return 2 * std::max(1, int(std::ceil(0.5 * kDiscPieces * cell / r)));  // even: pieces of 2 × 2
 }
 
 namespace {
@@ -234,34 +234,48 @@ DiscSamples discSamples(double r, double cellWidth, double cellHeight, int split
     std::vector<Piece> pieces;
     const double r2 = r * r, pw = cellWidth / split, ph = cellHeight / split;
     const int reachY = int(std::ceil(r / cellHeight + 0.5)), reachX = int(std::ceil(r / cellWidth + 0.5));
+    // A piece [x0, x1] × [y0, y1] with its centre at (px, py) in cells from the centre cell.
+    const auto add = [&](double x0, double x1, double y0, double y1, double px, double py) {
+        const Column total = inDisc(r2, x0, x1, y0, y1);
+        if (!(total.length > 1e-12 * pw * ph)) return;
+        Piece piece;
+        piece.area = float(total.length);
+        piece.meanHalfChord = float(total.integral / total.length);
+        // The DEM's triangle under the piece's centre: corners (c, r), (c + 1, r), (c, r + 1)
+        // where u + v <= 1, else (c + 1, r + 1), (c + 1, r), (c, r + 1).
+        const int c = int(std::floor(px)), rr = int(std::floor(py));
+        const double u = px - c, v = py - rr;
+        if (u + v <= 1) {
+            piece.col[0] = c, piece.row[0] = rr, piece.w[0] = float(1 - u - v);
+            piece.col[1] = c + 1, piece.row[1] = rr, piece.w[1] = float(u);
+            piece.col[2] = c, piece.row[2] = rr + 1, piece.w[2] = float(v);
+        } else {
+            piece.col[0] = c + 1, piece.row[0] = rr + 1, piece.w[0] = float(u + v - 1);
+            piece.col[1] = c + 1, piece.row[1] = rr, piece.w[1] = float(1 - v);
+            piece.col[2] = c, piece.row[2] = rr + 1, piece.w[2] = float(1 - u);
+        }
+        for (int t = 0; t < 3; ++t) reach = std::max({reach, std::abs(piece.col[t]), std::abs(piece.row[t])});
+        pieces.push_back(piece);
+    };
+    // Pieces of 2 × 2 where h exceeds r/4 everywhere on them (there h changes slowly: a
+    // clamp's edge crossing the piece errs less than the rim's finer pieces), split × split
+    // per cell elsewhere (docs/method.md, Height fields).
+    const int half = split / 2;
     for (int dy = -reachY; dy <= reachY; ++dy)
-        for (int b = 0; b < split; ++b) {
-            const double y0 = (dy - 0.5) * cellHeight + b * ph, y1 = y0 + ph;
+        for (int b = 0; b < half; ++b) {
+            const double y0 = (dy - 0.5) * cellHeight + 2 * b * ph, y1 = y0 + 2 * ph;
             for (int dx = -reachX; dx <= reachX; ++dx)
-                for (int a = 0; a < split; ++a) {
-                    const double x0 = (dx - 0.5) * cellWidth + a * pw, x1 = x0 + pw;
-                    const Column total = inDisc(r2, x0, x1, y0, y1);
-                    if (!(total.length > 1e-12 * pw * ph)) continue;
-                    Piece piece;
-                    piece.area = float(total.length);
-                    piece.meanHalfChord = float(total.integral / total.length);
-                    // The piece's centre in cells from the centre cell, and the DEM's
-                    // triangle under it: corners (c, r), (c + 1, r), (c, r + 1) where
-                    // u + v <= 1, else (c + 1, r + 1), (c + 1, r), (c, r + 1).
-                    const double px = dx - 0.5 + (a + 0.5) / split, py = dy - 0.5 + (b + 0.5) / split;
-                    const int c = int(std::floor(px)), rr = int(std::floor(py));
-                    const double u = px - c, v = py - rr;
-                    if (u + v <= 1) {
-                        piece.col[0] = c, piece.row[0] = rr, piece.w[0] = float(1 - u - v);
-                        piece.col[1] = c + 1, piece.row[1] = rr, piece.w[1] = float(u);
-                        piece.col[2] = c, piece.row[2] = rr + 1, piece.w[2] = float(v);
-                    } else {
-                        piece.col[0] = c + 1, piece.row[0] = rr + 1, piece.w[0] = float(u + v - 1);
-                        piece.col[1] = c + 1, piece.row[1] = rr, piece.w[1] = float(1 - v);
-                        piece.col[2] = c, piece.row[2] = rr + 1, piece.w[2] = float(1 - u);
+                for (int a = 0; a < half; ++a) {
+                    const double x0 = (dx - 0.5) * cellWidth + 2 * a * pw, x1 = x0 + 2 * pw;
+                    const double farX = std::max(std::abs(x0), std::abs(x1)), farY = std::max(std::abs(y0), std::abs(y1));
+                    if (r2 - farX * farX - farY * farY >= r2 / 16) {
+                        add(x0, x1, y0, y1, dx - 0.5 + (2 * a + 1.0) / split, dy - 0.5 + (2 * b + 1.0) / split);
+                        continue;
                     }
-                    for (int t = 0; t < 3; ++t) reach = std::max({reach, std::abs(piece.col[t]), std::abs(piece.row[t])});
-                    pieces.push_back(piece);
+                    for (int j = 0; j < 2; ++j)
+                        for (int i = 0; i < 2; ++i)
+                            add(x0 + i * pw, x0 + (i + 1) * pw, y0 + j * ph, y0 + (j + 1) * ph,
+                                dx - 0.5 + (2 * a + i + 0.5) / split, dy - 0.5 + (2 * b + j + 0.5) / split);
                 }
         }
     std::stable_sort(pieces.begin(), pieces.end(),
@@ -329,24 +343,36 @@ __attribute__((target_clones("avx2", "default"))) void sumDisc(const float* z, c
                                                               float* sums)
 {
     const Lanes z0 = loadLanes(z0lanes);
-    Lanes reach = broadcast(0), total = broadcast(0);
+    // Four partial sums, so that the additions do not wait for each other (a fixed order:
+    // the same result everywhere).
+    Lanes reach = broadcast(0), part[4] = {broadcast(0), broadcast(0), broadcast(0), broadcast(0)};
     const std::size_t taps = d.cellWeight.size();
-    for (std::size_t i = 0; i < taps; ++i) {
+    std::size_t i = 0;
+    for (; i + 4 <= taps; i += 4)
+        for (std::size_t u = 0; u < 4; ++u) {
+            const Lanes dz = loadLanes(z + at.cell[i + u]) - z0;
+            part[u] += broadcast(d.cellWeight[i + u]) * dz;
+            reach = maxLanes(reach, absLanes(dz));
+        }
+    for (; i < taps; ++i) {
         const Lanes dz = loadLanes(z + at.cell[i]) - z0;
-        total += broadcast(d.cellWeight[i]) * dz;
+        part[0] += broadcast(d.cellWeight[i]) * dz;
         reach = maxLanes(reach, absLanes(dz));
     }
+    Lanes total = (part[0] + part[1]) + (part[2] + part[3]);
     float most = 0;
     for (int k = 0; k < kLanes; ++k) most = std::max(most, reach[k]);
     const std::size_t n = d.size();
-    for (std::size_t i = 0; i < n && d.meanHalfChord[i] <= most; ++i) {
+    Lanes clampParts[2] = {broadcast(0), broadcast(0)};
+    for (i = 0; i < n && d.meanHalfChord[i] <= most; ++i) {
         const Lanes h = broadcast(d.meanHalfChord[i]);
         const Lanes below = broadcast(d.tapWeight[0][i]) * loadLanes(z + at.piece[0][i]) +
                             broadcast(d.tapWeight[1][i]) * loadLanes(z + at.piece[1][i]) +
                             broadcast(d.tapWeight[2][i]) * loadLanes(z + at.piece[2][i]) - z0 + h;
         const Lanes clamped = minLanes(maxLanes(below, broadcast(0)), h + h) - below;
-        total += h <= reach ? broadcast(d.area[i]) * clamped : broadcast(0);
+        clampParts[i & 1] += h <= reach ? broadcast(d.area[i]) * clamped : broadcast(0);
     }
+    total += clampParts[0] + clampParts[1];
     Lanes out = loadLanes(sums) + total;
     std::memcpy(sums, &out, sizeof out);
 }

@@ -89,7 +89,8 @@ int discSplit(double r, double cellWidth, double cellHeight);
 
 /// The disc of radius @p r on a grid of cells @p cellWidth × @p cellHeight: the hat
 /// functions' integrals W_o (whole triangles in closed form, the squares the rim cuts in
-/// 64 × 64 parts), and the pieces of cells split @p split × @p split (A and H by adaptive
+/// 64 × 64 parts), and the pieces of cells split @p split × @p split (even; 2 × 2 of them as one
+/// where h exceeds r/4 throughout; A and H by adaptive
 /// quadrature across x of the closed forms across y, exactly where the rim cuts a piece).
 DiscSamples discSamples(double r, double cellWidth, double cellHeight, int split);
 
