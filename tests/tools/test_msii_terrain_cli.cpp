@@ -727,3 +727,39 @@ TEST(MsiiTerrain, NoiseDemStaysInBoundedMemory)
     ASSERT_NE(at, std::string::npos) << record;
     EXPECT_LT(std::stod(record.substr(at + 21)), 600e6) << "before: 2.3 GB";
 }
+
+// `msii compute DEM -o NAME.ply` writes the DEM's mesh with the bands as vertex properties
+// (a vertex per cell with a height, in the GeoTIFF's cell order), equal to the GeoTIFF's
+// values, and no GeoTIFF; the record says which route computed them.
+TEST(MsiiTerrain, PlyOutputIsTheDemMeshWithTheBands)
+{
+    const fs::path tif = tempDir() / "asply.msii.tif", ply = tempDir() / "asply.ply";
+    const std::string common = "compute '" + demSample() + "' -r 3 -n 4 -q --overwrite --float32 --bands quality,V,S_04 ";
+    RunResult r = run(MSII_EXE, common + "--raster-output '" + tif.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = run(MSII_EXE, common + "-o '" + ply.string() + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_FALSE(fs::exists(ply.string() + ".part.tif"));
+    const std::string record = readFile((tempDir() / "asply.json").string());
+    EXPECT_NE(record.find("\"used\": \"heights\""), std::string::npos) << record;
+    const RasterImage raster = readRaster(tif.string());
+    const DemMesh dm = demToMesh(readDem(demSample()));
+    ReadMeshOptions ro;
+    ro.keepVertexProperties = true;
+    const ReadMeshResult mesh = readMesh(ply.string(), ro);
+    ASSERT_EQ(mesh.mesh.numVertices(), dm.mesh.numVertices());
+    EXPECT_EQ(mesh.mesh.numTriangles(), dm.mesh.numTriangles());
+    std::size_t compared = 0;
+    for (const RasterBand& b : raster.bands) {
+        const auto p = std::find_if(mesh.vertexProperties.begin(), mesh.vertexProperties.end(),
+                                    [&](const VertexProperty& q) { return q.name == b.name; });
+        ASSERT_NE(p, mesh.vertexProperties.end()) << b.name;
+        for (std::size_t c = 0; c < b.values.size(); ++c) {
+            const std::uint32_t v = dm.vertexOfCell[c];
+            if (v == DemMesh::kNoVertex || std::isnan(b.values[c])) continue;
+            ASSERT_EQ(p->values[v], b.values[c]) << b.name << " cell " << c;
+            ++compared;
+        }
+    }
+    EXPECT_GT(compared, 6u * 15000u);
+}

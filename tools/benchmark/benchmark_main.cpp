@@ -150,8 +150,13 @@ What the rows are:
   top of the engine's own peak, and should cost no more than that sum.
 - **DEM**: `msii compute` on a generated GeoTIFF DEM (0.5 m cells in EPSG:25832, hills about
   25 m wide and 4 m high, 200 small nodata patches), R = 15 m, N = 16, the default bands
-  (quality and V at R/4, R/2, 3R/4 and R: V alone is computed), in windows sized to the default 3 GB budget, in a process of its own with its peak memory
+  (quality and V at R/4, R/2, 3R/4 and R: V alone is computed, from the height field), in
+  windows of 2,048 cells, in a process of its own with its peak memory
   ([terrain.md](terrain.md#large-areas)).
+- **Terrain tools' case** (`--terrain-peer`): a 1000 × 1000 DEM of 1 m at R = 10 and 30
+  cells, on the height field and on the mesh (`--engine mesh`), and with `--rvt PATH`
+  RVT_py's sky-view factor and openness (16 directions) and multi-scale topographic
+  position at the same radius ([terrain.md](terrain.md#large-areas)).
 
 This machine's timings vary from one sitting to the next, by 15–20 % within a day and by up
 to 2× between days, also in stages whose code did not change: compare builds in alternating
