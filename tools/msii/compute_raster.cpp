@@ -163,6 +163,10 @@ OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, c
     j["mesh"] = {{"triangles", result.triangles},
                  {"masked_values", result.masked.total()},
                  {"cells_with_filled_share", result.masked.withFilledShare}};
+    // On the height field, filled_share is computed only as a band.
+    if (result.engine == DemEngine::HeightField &&
+        std::find(result.bands.begin(), result.bands.end(), "filled_share") == result.bands.end())
+        j["mesh"]["cells_with_filled_share"] = nullptr;
     addDiagnostics(j, result.diagnostics);
     if (const double peak = peakMemoryBytes(); peak > 0) j["peak_memory_bytes"] = peak;
     const InvariantsCost& t = result.cost;

@@ -451,9 +451,15 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
     result.radii = options.radii;
     const std::size_t n = options.radii.size(), cells = std::size_t(own.cols) * std::size_t(own.rows);
     const float nan = std::numeric_limits<float>::quiet_NaN();
-    if (options.computeVolume) result.volume.assign(n, std::vector<float>(cells, nan));
-    if (options.computeSphere) result.sphere.assign(n, std::vector<float>(cells, nan));
     const SumRadii sums = sumRadii(options);
+    // Columns for the radii wanted only (the others stay empty: a DEM's default bands need
+    // four of N).
+    if (options.computeVolume) result.volume.resize(n);
+    if (options.computeSphere) result.sphere.resize(n);
+    for (std::size_t j = 0; j < n; ++j) {
+        if (sums.volumeOf[j] >= 0) result.volume[j].assign(cells, nan);
+        if (sums.belowOf[j] >= 0) result.sphere[j].assign(cells, nan);
+    }
     if (sums.radius.empty() || cells == 0) return result;
     std::vector<DiscSamples> discs(sums.radius.size());
     tbb::parallel_for(std::size_t(0), discs.size(), [&](std::size_t k) {

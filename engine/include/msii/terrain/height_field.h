@@ -45,15 +45,15 @@ struct HeightFieldOptions {
     double cellHeight = 1;       ///< and along a column (y)
     bool computeVolume = true;   ///< V̂
     bool computeSphere = true;   ///< Ŝ
-    /// The radii whose values are wanted (radius indices); empty = all. The others stay NaN
-    /// and cost nothing (a DEM's default bands need four of N).
+    /// The radii whose values are wanted (radius indices); empty = all. The others get no
+    /// column and cost nothing (a DEM's default bands need four of N).
     std::vector<int> wanted;
 };
 
 struct HeightFieldResult {
     std::vector<double> radii;  ///< as given
     /// [j][k] for own cell k (row-major in the own rectangle): V/|B_r| and S/(4π r²), plane ½;
-    /// NaN where not wanted, and where a cell of the ball has no height.
+    /// NaN where a cell of the ball has no height; column j empty where radius j is not wanted.
     FeatureColumns volume, sphere;
     double seconds = 0;
 };
