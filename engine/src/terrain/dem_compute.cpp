@@ -153,6 +153,16 @@ struct WindowLayout {
     GridContinuationOptions continuation;
 };
 
+/// The cells computed and written: options.region, checked, or all @p width × @p height.
+RasterRegion regionOf(const DemComputeOptions& options, int width, int height)
+{
+    if (options.region.cols == 0) return {0, 0, width, height};
+    const RasterRegion& g = options.region;
+    if (g.col < 0 || g.row < 0 || g.rows < 1 || g.col + g.cols > width || g.row + g.rows > height)
+        throw InvalidInputError("the region to compute lies outside the raster");
+    return g;
+}
+
 /// The plan of several windows, made on the window of 1024² cells at the raster's centre:
 /// its voxel size and vertex spacing, and the local frame's origin at the raster's centre.
 /// With @p whole, the plan of the raster computed in one piece instead, on all of it (one
@@ -209,13 +219,7 @@ WindowLayout layWindows(const DemSource& source, const std::string& input, const
     w.oneWindow = options.windowCells == 0 ? double(w.width) * double(w.height) <= cellsPerWindow
                                            : options.windowCells >= std::max(w.width, w.height);
     w.side = std::max(w.width, w.height);
-    w.region = {0, 0, w.width, w.height};
-    if (options.region.cols > 0) {
-        const RasterRegion& g = options.region;
-        if (g.col < 0 || g.row < 0 || g.rows < 1 || g.col + g.cols > w.width || g.row + g.rows > w.height)
-            throw InvalidInputError("the region to compute lies outside the raster");
-        w.region = g;
-    }
+    w.region = regionOf(options, w.width, w.height);
     const bool part = options.region.cols > 0;
     if (w.oneWindow && !part && !split) return w;  // planned on its own mesh, as the mesh path would
     // A part of a raster that fits one window (or a raster that fits one by its cells but not
@@ -286,13 +290,7 @@ WindowLayout layHeightFieldWindows(const DemSource& source, const DemComputeOpti
     const int reach = int(std::ceil(asked.radius * (1 + kHeightFieldSphereStep) / std::min(k.cellWidth, k.cellHeight))) + 2;
     c.margin = reach;
     c.fitRadius = std::max(0.25 * asked.radius, 3 * w.cell);
-    w.region = {0, 0, w.width, w.height};
-    if (options.region.cols > 0) {
-        const RasterRegion& g = options.region;
-        if (g.col < 0 || g.row < 0 || g.rows < 1 || g.col + g.cols > w.width || g.row + g.rows > w.height)
-            throw InvalidInputError("the region to compute lies outside the raster");
-        w.region = g;
-    }
+    w.region = regionOf(options, w.width, w.height);
     result.plan.radii = k.radii;
     // Own cells per window: 2048² cells take about 0.2 GB with their halos and bands.
     constexpr int kSide = 2048;

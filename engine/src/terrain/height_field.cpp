@@ -92,16 +92,13 @@ int discSplit(double r, double cellWidth, double cellHeight)
 
 namespace {
 
-/// The area of [x0, x1] × [y0, y1] inside the disc of radius² @p r2 about the origin, and the
-/// integral of h over it.
-Column inDisc(double r2, double x0, double x1, double y0, double y1)
+/// [x0, x1] clipped to the disc of radius² @p r2 and split at the columns where its rim
+/// crosses y0 or y1, ascending in @p cuts: each part is smooth inside and square-root-like
+/// at most at its ends. Returns the number of ends (2 to 6).
+int rimCuts(double r2, double x0, double x1, double y0, double y1, double (&cuts)[6])
 {
-    const double nearX = x0 > 0 ? x0 : (x1 < 0 ? -x1 : 0), nearY = y0 > 0 ? y0 : (y1 < 0 ? -y1 : 0);
-    if (nearX * nearX + nearY * nearY >= r2) return {};
     x0 = std::max(x0, -std::sqrt(r2)), x1 = std::min(x1, std::sqrt(r2));
-    // Split at the columns where the rim crosses y0 or y1, so that each part is smooth inside
-    // and square-root-like at most at its ends.
-    double cuts[6] = {x0, x1};
+    cuts[0] = x0, cuts[1] = x1;
     int n = 2;
     for (const double y : {y0, y1})
         if (y * y < r2)
@@ -111,6 +108,18 @@ Column inDisc(double r2, double x0, double x1, double y0, double y1)
             }
     for (int i = 1; i < n; ++i)  // insertion sort of at most six
         for (int k = i; k > 0 && cuts[k] < cuts[k - 1]; --k) std::swap(cuts[k], cuts[k - 1]);
+    return n;
+}
+
+/// The area of [x0, x1] × [y0, y1] inside the disc of radius² @p r2 about the origin, and the
+/// integral of h over it.
+Column inDisc(double r2, double x0, double x1, double y0, double y1)
+{
+    const double nearX = x0 > 0 ? x0 : (x1 < 0 ? -x1 : 0), nearY = y0 > 0 ? y0 : (y1 < 0 ? -y1 : 0);
+    if (nearX * nearX + nearY * nearY >= r2) return {};
+    double cuts[6];
+    const int n = rimCuts(r2, x0, x1, y0, y1, cuts);
+    x0 = cuts[0], x1 = cuts[n - 1];
     const Simpson simpson{r2, y0, y1, 1e-9 * (x1 - x0) * (y1 - y0) * std::sqrt(r2)};
     Column total;
     for (int k = 0; k + 1 < n; ++k) {
@@ -129,17 +138,8 @@ double areaInDisc(double r2, double x0, double x1, double y0, double y1)
     if (nearX * nearX + nearY * nearY >= r2) return 0;
     const double farX = std::max(std::abs(x0), std::abs(x1)), farY = std::max(std::abs(y0), std::abs(y1));
     if (farX * farX + farY * farY <= r2) return (x1 - x0) * (y1 - y0);
-    x0 = std::max(x0, -std::sqrt(r2)), x1 = std::min(x1, std::sqrt(r2));
-    double cuts[6] = {x0, x1};
-    int n = 2;
-    for (const double y : {y0, y1})
-        if (y * y < r2)
-            for (const double sign : {-1.0, 1.0}) {
-                const double x = sign * std::sqrt(r2 - y * y);
-                if (x > x0 && x < x1 && n < 6) cuts[n++] = x;
-            }
-    for (int i = 1; i < n; ++i)  // insertion sort of at most six
-        for (int k = i; k > 0 && cuts[k] < cuts[k - 1]; --k) std::swap(cuts[k], cuts[k - 1]);
+    double cuts[6];
+    const int n = rimCuts(r2, x0, x1, y0, y1, cuts);
     double area = 0;
     for (int k = 0; k + 1 < n; ++k) {
         const double p = cuts[k], q = cuts[k + 1], mid = 0.5 * (p + q), a = std::sqrt(std::max(0.0, r2 - mid * mid));
