@@ -45,6 +45,19 @@ public:
         mWhole.assign(n, 0), mArea.assign(n, 0), mArc.assign(n, 0);
         mSquared.resize(n);
         for (std::size_t k = 0; k < n; ++k) mSquared[k] = mRadii[flagged[k]] * mRadii[flagged[k]];
+        // The counts below by a table over r², of buckets narrower than the nearest two
+        // flagged radii² are apart (at most kMaxBuckets): a lookup and a step or none.
+        double gap = mSquared[0];
+        for (std::size_t k = 1; k < n; ++k) gap = std::min(gap, mSquared[k] - mSquared[k - 1]);
+        const double top = mSquared.back();
+        const std::size_t buckets = gap > 0 ? std::size_t(std::min(double(kMaxBuckets), std::ceil(top / gap)) + 1) : 1;
+        mPerSquared = double(buckets) / top;
+        mBucket.resize(buckets + 1);
+        std::size_t k = 0;
+        for (std::size_t b = 0; b <= buckets; ++b) {
+            while (k < n && mSquared[k] * mPerSquared < double(b)) ++k;
+            mBucket[b] = std::uint32_t(k);
+        }
     }
 
     std::size_t size() const { return mFlagged.size(); }
@@ -53,16 +66,14 @@ public:
     /// The first flagged radius k with r_k² > @p x2 (size() if none).
     std::size_t firstAbove(double x2) const
     {
-        if (mSquared.size() > 4) return std::size_t(std::upper_bound(mSquared.begin(), mSquared.end(), x2) - mSquared.begin());
-        std::size_t k = 0;  // a few: in turn
+        std::size_t k = guess(x2);
         while (k < mSquared.size() && mSquared[k] <= x2) ++k;
         return k;
     }
     /// The first flagged radius k with r_k² >= @p x2 (size() if none).
     std::size_t firstAtLeast(double x2) const
     {
-        if (mSquared.size() > 4) return std::size_t(std::lower_bound(mSquared.begin(), mSquared.end(), x2) - mSquared.begin());
-        std::size_t k = 0;
+        std::size_t k = guess(x2);
         while (k < mSquared.size() && mSquared[k] < x2) ++k;
         return k;
     }
@@ -92,6 +103,17 @@ public:
     }
 
 private:
+    static constexpr double kMaxBuckets = 4096;
+    /// The flagged radii with r_k² · mPerSquared below the bucket of @p x2: none of them is at
+    /// or above x2 (the product is monotone in r_k²), and at most one more is below it
+    /// where the buckets are narrower than the radii² are apart, so the callers step up to
+    /// the exact count, mostly once or not at all.
+    std::size_t guess(double x2) const
+    {
+        const double b = x2 * mPerSquared;
+        return mBucket[b < double(mBucket.size() - 1) ? std::size_t(b) : mBucket.size() - 1];
+    }
+
     /// Rounded to the nearest unit (any fixed rule will do: only its sums must agree).
     static Fixed fixed(double x) { return Fixed(std::int64_t(x < 0 ? x - 0.5 : x + 0.5)); }
 
@@ -99,27 +121,29 @@ private:
     const double mAreaUnits, mArcUnits;
     std::vector<std::uint32_t> mFlagged;
     std::vector<double> mSquared;  ///< of the flagged radii
+    double mPerSquared = 0;        ///< buckets per unit of r²
+    std::vector<std::uint32_t> mBucket;  ///< per bucket b: the first flagged k with r_k² ≥ b / mPerSquared, about
     std::vector<Fixed> mWhole, mArea, mArc;
 };
 
-/// A triangle of a cell: its bounding sphere, area and index.
-struct CellSlot {
-    Vec3 centroid;
-    double radius, area;
-    std::uint32_t triangle;
-};
-
 /// Triangles binned by centroid into cells of edge c, and these into blocks of 4 × 4 × 4
-/// cells: each block and cell with the box around its triangles and their area, so that a
-/// block or cell that no flagged sphere cuts is added whole and the walk about a vertex
-/// opens only those along the flagged spheres.
+/// cells, each block with the box around its triangles and their area, so that a block that
+/// no flagged sphere cuts is added whole and the walk about a vertex opens only those along
+/// the flagged spheres. A block's triangles are consecutive slots, each with its bounding
+/// sphere and fixed-point area in arrays of one number each (the walk's tests vectorise).
 class CellGrid {
 public:
-    /// A block (its cells [first, last)) or a cell (its slots [first, last)).
+    /// A block: the box around its triangles, their fixed-point area and its slots [first, last).
     struct Box {
-        Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};  ///< around its triangles
-        Fixed area = 0;                     ///< Σ of its triangles' fixed-point areas
+        Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+        Fixed area = 0;
         std::uint32_t first = 0, last = 0;
+    };
+    /// The slots: per triangle its bounding sphere's centre and radius, fixed-point area and corners.
+    struct Slots {
+        std::vector<double> x, y, z, radius;
+        std::vector<std::int64_t> area;
+        std::vector<std::array<Vec3, 3>> corners;  ///< the triangle's, in the slot's order (no indirection)
     };
 
     /// The triangles @p triangles of @p mesh (with @p frames) in cells of edge @p cellSize.
@@ -139,7 +163,8 @@ public:
         // Blocks' columns are indexed densely: at most ~1e7 of them, with cells grown if need be.
         while ((hi.x - lo.x) / (kBlock * mCell) * ((hi.y - lo.y) / (kBlock * mCell)) > 1e7) mCell *= 2;
         for (int a = 0; a < 3; ++a) mCount[a] = std::int64_t(std::floor((hi[a] - lo[a]) / (kBlock * mCell))) + 1;
-        // Sorted by block, then by cell within the block.
+        // Sorted by block, then by cell within the block (neighbours in space, neighbours in
+        // memory).
         std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(triangles.size());
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, triangles.size()), [&](const auto& range) {
             for (std::size_t s = range.begin(); s < range.end(); ++s) {
@@ -150,33 +175,28 @@ public:
             }
         });
         tbb::parallel_sort(keyed.begin(), keyed.end());
-        mSlots.resize(keyed.size());
-        for (std::size_t s = 0; s < keyed.size(); ++s) {
+        const std::size_t n = keyed.size();
+        mSlots.x.resize(n), mSlots.y.resize(n), mSlots.z.resize(n), mSlots.radius.resize(n);
+        mSlots.area.resize(n), mSlots.corners.resize(n);
+        for (std::size_t s = 0; s < n; ++s) {
             const std::uint32_t t = keyed[s].second;
-            mSlots[s] = {frames[t].centroid, frames[t].boundingRadius, frames[t].area, t};
+            const TriangleFrame& f = frames[t];
+            mSlots.x[s] = f.centroid.x, mSlots.y[s] = f.centroid.y, mSlots.z[s] = f.centroid.z;
+            mSlots.radius[s] = f.boundingRadius;
+            for (int c = 0; c < 3; ++c) mSlots.corners[s][c] = mesh.points[mesh.triangles[t][c]];
+            mSlots.area[s] = std::int64_t(units.areaUnits(f.area));
             if (s == 0 || keyed[s].first >> 6 != keyed[s - 1].first >> 6) {
                 mKeys.push_back(keyed[s].first >> 6);
                 mBlocks.emplace_back();
-                mBlocks.back().first = std::uint32_t(mCells.size());
+                mBlocks.back().first = std::uint32_t(s);
             }
-            if (s == 0 || keyed[s].first != keyed[s - 1].first) {
-                mCells.emplace_back();
-                mCells.back().first = std::uint32_t(s);
-                mBlocks.back().last = std::uint32_t(mCells.size());
-            }
-            mCells.back().last = std::uint32_t(s + 1);
-            const Fixed area = units.areaUnits(frames[t].area);
-            mCells.back().area += area;
-            mBlocks.back().area += area;
+            mBlocks.back().last = std::uint32_t(s + 1);
+            mBlocks.back().area += mSlots.area[s];
         }
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mBlocks.size()), [&](const auto& range) {
             for (std::size_t b = range.begin(); b < range.end(); ++b)
-                for (std::uint32_t c = mBlocks[b].first; c < mBlocks[b].last; ++c) {
-                    Box& cell = mCells[c];
-                    for (std::uint32_t s = cell.first; s < cell.last; ++s)
-                        for (const std::uint32_t v : mesh.triangles[mSlots[s].triangle]) grow(cell, mesh.points[v]);
-                    grow(mBlocks[b], cell.lo), grow(mBlocks[b], cell.hi);
-                }
+                for (std::uint32_t s = mBlocks[b].first; s < mBlocks[b].last; ++s)
+                    for (const Vec3& corner : mSlots.corners[s]) grow(mBlocks[b], corner);
         });
         // Where each column (x, y) of blocks starts among the keys.
         mColumn.assign(std::size_t(mCount[0] * mCount[1]) + 1, 0);
@@ -184,8 +204,7 @@ public:
         for (std::size_t c = 1; c < mColumn.size(); ++c) mColumn[c] += mColumn[c - 1];
     }
 
-    const CellSlot& slot(std::uint32_t s) const { return mSlots[s]; }
-    const Box& cell(std::uint32_t c) const { return mCells[c]; }
+    const Slots& slots() const { return mSlots; }
 
     /// Calls @p visit(block) for every block whose box may come within @p reach of @p p.
     template <class Visit> void forEachBlockNear(const Vec3& p, double reach, Visit&& visit) const
@@ -247,9 +266,9 @@ private:
     double mCell, mMaxRadius = 0;
     Vec3 mOrigin;
     std::int64_t mCount[3] = {1, 1, 1};  ///< blocks per axis
-    std::vector<CellSlot> mSlots;
+    Slots mSlots;
     std::vector<std::uint64_t> mKeys;    ///< per block
-    std::vector<Box> mBlocks, mCells;
+    std::vector<Box> mBlocks;
     std::vector<std::uint32_t> mColumn;
 };
 
@@ -473,7 +492,7 @@ Measures clipOne(const std::array<Vec3, 3>& q, double r)
 /// The ball sums of one vertex p over the triangles near it.
 class VertexWalk {
 public:
-    VertexWalk(const TriMesh& mesh, FlaggedSums& sums) : mMesh(mesh), mSums(sums)
+    explicit VertexWalk(FlaggedSums& sums) : mSums(sums)
     {
     }
 
@@ -481,62 +500,76 @@ public:
     void run(const Vec3& p, const std::vector<CellGrid>& grids)
     {
         const double reach = mSums.largestRadius();
-        // A margin against rounding: a cell is added whole only if no flagged radius comes
+        // A margin against rounding: a block is added whole only if no flagged radius comes
         // near its nearest or farthest point, so that each of its triangles would be
         // counted alike one by one (the same total in any tile).
         const double margin = 1e-9 * reach;
         const std::size_t n = mSums.size();
-        // What a box (of a block or a cell) is to the flagged spheres: beyond reach, cut by
-        // one, or whole inside from one on (added whole).
-        enum class Kind { Beyond, Cut, Whole };
-        const auto classify = [&](const CellGrid::Box& box) {
-            const auto [near, far] = boxDistances(p, box.lo, box.hi);
-            if (near >= reach) return Kind::Beyond;
-            const double nearBelow = std::max(0.0, near - margin), farAbove = far + margin;
-            const std::size_t first = mSums.firstAbove(nearBelow * nearBelow);
-            const std::size_t whole = mSums.firstAtLeast(farAbove * farAbove);
-            if (first != whole) return Kind::Cut;
-            if (whole < n) mSums.addWhole(whole, box.area);
-            return Kind::Whole;
-        };
         for (const CellGrid& grid : grids)
             grid.forEachBlockNear(p, reach, [&](const CellGrid::Box& block) {
-                if (classify(block) != Kind::Cut) return;
-                for (std::uint32_t c = block.first; c < block.last; ++c) {
-                    const CellGrid::Box& cell = grid.cell(c);
-                    if (classify(cell) != Kind::Cut) continue;
-                    for (std::uint32_t s = cell.first; s < cell.last; ++s) addTriangle(p, grid.slot(s), margin);
+                // Beyond reach, whole inside from one flagged radius on (added whole), or cut
+                // by one: then its triangles one by one.
+                const auto [near, far] = boxDistances(p, block.lo, block.hi);
+                if (near >= reach) return;
+                const double nearBelow = std::max(0.0, near - margin), farAbove = far + margin;
+                const std::size_t first = mSums.firstAbove(nearBelow * nearBelow);
+                const std::size_t whole = mSums.firstAtLeast(farAbove * farAbove);
+                if (first == whole) {
+                    if (whole < n) mSums.addWhole(whole, block.area);
+                    return;
                 }
+                for (std::uint32_t s = block.first; s < block.last; s += kChunk)
+                    addTriangles(p, grid.slots(), s, std::min(block.last, s + std::uint32_t(kChunk)), margin);
             });
         flush();
     }
 
 private:
-    /// Adds one triangle: as the exact mode's VertexBall (exact.cpp), at the flagged radii.
-    void addTriangle(const Vec3& p, const CellSlot& slot, double margin)
+    static constexpr std::size_t kChunk = 64;
+
+    /// Adds the triangles of slots [@p s0, @p s1) (at most kChunk): as the exact mode's
+    /// VertexBall (exact.cpp), at the flagged radii. Their bounding spheres first, all
+    /// together (a loop that vectorises): where no flagged sphere comes near one, it is
+    /// whole inside from one radius on, or beyond reach, without its corners.
+    void addTriangles(const Vec3& p, const CellGrid::Slots& slots, std::uint32_t s0, std::uint32_t s1, double margin)
     {
-        // Its bounding sphere first: where no flagged sphere comes near it, it is whole
-        // inside from one radius on, or beyond reach, without its corners.
-        const double centre = norm(slot.centroid - p);
-        const double near = std::max(0.0, centre - slot.radius - margin), far = centre + slot.radius + margin;
-        const std::size_t first = mSums.firstAbove(near * near);
-        if (first >= mSums.size()) return;  // beyond every flagged radius
-        const std::size_t whole = mSums.firstAtLeast(far * far);
-        if (first == whole) {
-            mSums.addWhole(whole, mSums.areaUnits(slot.area));
-            return;
+        const std::size_t m = s1 - s0;
+        double near2[kChunk], far2[kChunk], near[kChunk];
+        for (std::size_t j = 0; j < m; ++j) {
+            const double dx = slots.x[s0 + j] - p.x, dy = slots.y[s0 + j] - p.y, dz = slots.z[s0 + j] - p.z;
+            const double centre = std::sqrt(dx * dx + dy * dy + dz * dz), rho = slots.radius[s0 + j];
+            const double lo = std::max(0.0, centre - rho - margin), hi = centre + rho + margin;
+            near[j] = lo, near2[j] = lo * lo, far2[j] = hi * hi;
         }
-        const auto& corners = mMesh.triangles[slot.triangle];
-        const std::array<Vec3, 3> q{mMesh.points[corners[0]] - p, mMesh.points[corners[1]] - p,
-                                    mMesh.points[corners[2]] - p};
+        const std::size_t n = mSums.size();
+        for (std::size_t j = 0; j < m; ++j) {
+            const std::size_t first = mSums.firstAbove(near2[j]);
+            if (first >= n) continue;  // beyond every flagged radius
+            const std::uint32_t s = s0 + std::uint32_t(j);
+            const std::size_t whole = mSums.firstAtLeast(far2[j]);
+            if (first == whole) {
+                mSums.addWhole(whole, slots.area[s]);
+                continue;
+            }
+            addCorners(p, slots, s, near[j]);
+        }
+    }
+
+    /// Adds the triangle of slot @p s whose bounding sphere (nearest @p near to p) a flagged
+    /// sphere may cut: by its corners.
+    void addCorners(const Vec3& p, const CellGrid::Slots& slots, std::uint32_t s, double near)
+    {
+        const std::array<Vec3, 3>& corners = slots.corners[s];
+        const std::array<Vec3, 3> q{corners[0] - p, corners[1] - p, corners[2] - p};
         const double q2[3] = {squaredNorm(q[0]), squaredNorm(q[1]), squaredNorm(q[2])};
         // From the first flagged radius at or beyond its farthest corner on, whole inside.
         const std::size_t wholeFrom = mSums.firstAtLeast(std::max({q2[0], q2[1], q2[2]}));
-        if (wholeFrom < mSums.size()) mSums.addWhole(wholeFrom, mSums.areaUnits(slot.area));
+        if (wholeFrom < mSums.size()) mSums.addWhole(wholeFrom, slots.area[s]);
         // The flagged radii that may cut it lie above a lower bound of its distance: that of
         // its bounding sphere, or (nearest corner)² − ρ_t² (exact.cpp, VertexBall); a clip
         // gives 0 where the sphere passes it by.
-        const double low2 = std::max(std::min({q2[0], q2[1], q2[2]}) - slot.radius * slot.radius, near * near);
+        const double rho = slots.radius[s];
+        const double low2 = std::max(std::min({q2[0], q2[1], q2[2]}) - rho * rho, near * near);
         for (std::size_t k = mSums.firstAbove(low2); k < wholeFrom; ++k) queue(q, k);
     }
 
@@ -569,7 +602,6 @@ private:
         b.size = 0;
     }
 
-    const TriMesh& mMesh;
     FlaggedSums& mSums;
     ClipBatch mBatch;
 };
@@ -602,7 +634,7 @@ ExactPairsCount evaluatePairsExactly(const TriMesh& mesh, const std::vector<doub
     if (progress) progress->start("P and L, exact where the kernels blur", vertices.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertices.size(), 16), [&](const auto& range) {
         FlaggedSums sums(radii);
-        VertexWalk walk(mesh, sums);
+        VertexWalk walk(sums);
         std::vector<std::uint32_t> own;
         for (std::size_t v = range.begin(); v < range.end(); ++v) {
             const std::uint32_t i = vertices[v];
