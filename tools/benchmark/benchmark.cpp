@@ -5,6 +5,7 @@
 
 #include <msii/core/stopwatch.h>
 
+#include <fcntl.h>
 #include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -25,15 +26,24 @@ std::string number(double v)
     return std::string(text);
 }
 
-ChildRun runChild(const std::vector<std::string>& args)
+ChildRun runChild(const std::vector<std::string>& args, const std::string& log)
 {
     std::vector<char*> argv;
     for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
     ChildRun r;
+    // With a log, the child's output goes there (programs that print a line per step).
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    if (!log.empty()) {
+        posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+        posix_spawn_file_actions_adddup2(&actions, 1, 2);
+    }
     const Stopwatch wall;
     pid_t pid = 0;
-    if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) return r;
+    const int spawned = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    if (spawned != 0) return r;
     int status = 0;
     rusage usage{};
     if (wait4(pid, &status, 0, &usage) != pid) return r;

@@ -20,6 +20,7 @@
 #include <cstddef>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -39,7 +40,7 @@ struct ChildRun {
 };
 
 /// Runs @p args (the program's path first) in a process of its own and waits for it.
-ChildRun runChild(const std::vector<std::string>& args);
+ChildRun runChild(const std::vector<std::string>& args, const std::string& log = "");
 
 /// What the benchmark prints, kept as well: `msii-benchmark --markdown FILE` writes it into
 /// the performance page.
@@ -73,6 +74,9 @@ struct Settings {
     std::string rvt;           ///< a folder holding RVT_py's package rvt, for the peer's rows
     int exactVertices = 2000;
     bool exactSlab = true, processes = true;
+    bool scans = true;         ///< the scans case: scan-like slabs of ~38k and ~300k vertices, and the tablet
+    std::string before;        ///< an earlier msii program, run beside --msii on the scans case
+    std::string gigamesh;      ///< a folder holding GigaMesh's gigamesh-featurevectors and -sl
     std::string markdown;
 
     /// Whether the invariant with letter @p c is computed.
@@ -217,6 +221,47 @@ struct TabletExtras {
 
 /// The tablet's table: the line that says what was measured, the machine, and the stages.
 void printTabletTable(Report& report, const Settings& s, const TabletRuns& t, const TabletExtras& x);
+
+// Scans of the sizes most users have, and the established tool on one (scans_case.cpp).
+/// One program's runs of msii compute on one scan with one set of invariants: each stage's
+/// seconds per run (the JSON record's timings), the process's wall time and peak memory.
+struct ScanTimings {
+    std::map<std::string, std::vector<double>> stages;
+    std::vector<double> wall, peakBytes;
+    double shareExact = -1;  ///< the share of P, L values evaluated exactly (-1: not said)
+    bool ok = true;
+};
+/// A scan of the case: its PLY, size, radius and threads, and the runs with all four
+/// invariants ([0]) and with V and S alone ([1]), of --msii ([·][0]) and --before ([·][1]).
+struct ScanCase {
+    std::string name, input;
+    std::size_t vertices = 0;
+    double radius = 0, medianEdge = 0;
+    int threads = 1;
+    ScanTimings runs[2][2];
+};
+/// GigaMesh's tools on the smallest scan, one CPU: gigamesh-featurevectors (V and P at the N
+/// radii) and gigamesh-featurevectors-sl (S, then L, one radius per run, at each radius).
+struct GigaMeshRun {
+    bool ran = false, ok = false;
+    std::string error;
+    double volumePatch = 0, sphereLine = 0, peakBytes = 0;
+    std::vector<double> msiiVolumePatch;  ///< msii compute --invariants V,P on the same scan, one thread
+};
+struct ScanRuns {
+    std::vector<ScanCase> cases;
+    bool before = false;
+    GigaMeshRun gigamesh;
+};
+/// The scans case: scan-like closed slabs of about 38k (one thread) and 300k vertices (two
+/// threads) at R = 25 median edges, and the tablet (bench.input, written already; two
+/// threads, R = --radius), each computed by msii compute in a process of its own, run after
+/// run, with all four invariants and with V and S alone; with --before, the earlier program
+/// in turn with --msii on every run; with --gigamesh, GigaMesh's tools on the smallest scan.
+ScanRuns runScans(const Bench& bench);
+/// A table per scan: each stage's median seconds, and with --before both programs and their
+/// ratio; then GigaMesh's times and their ratio to msii's.
+void printScanTables(Report& report, const Settings& s, const ScanRuns& scans);
 
 // The DEM (dem_case.cpp).
 

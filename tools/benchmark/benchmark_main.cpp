@@ -61,6 +61,20 @@ What the rows are:
   each run once in a process of its own, with that process's peak memory. The Python
   result holds its arrays (vertices, faces and the (n, N) float32 arrays of V, S, P, L) on
   top of the engine's own peak, and should cost no more than that sum.
+- **Scans** (`--scans`, on by default): `msii compute`, in a process of its own as a user
+  runs it, on scan-like closed slabs of about 38k vertices (one thread) and 300k vertices
+  (two threads), and on the tablet (two threads). The slabs have triangles of aspect 3 : 1,
+  vertex density varying 4×, white scanner noise of about a tenth of an edge, and walls and
+  bottom of a few long triangles; R is 25 median edges. Each stage comes from the run's JSON
+  record, with all four invariants and with V and S alone. With `--before "PROGRAM"` an
+  earlier build runs in turn with this one on the same inputs, and the table gives both and
+  their ratio (an earlier build: `git worktree add ../msii-old COMMIT`, then build it as the
+  README says and pass `../msii-old/build/tools/msii`). With `--gigamesh PATH`, GigaMesh's
+  `gigamesh-featurevectors` (V and P at the N radii) and `gigamesh-featurevectors-sl` (S and
+  L, one radius per run) run on the 38k-vertex slab on one CPU, against `msii compute -j 1`.
+  Build them from GigaMesh's public repository with CMake (`-DBUILD_GUI=OFF
+  -DENABLE_TESTS=OFF`, targets `gigamesh-featurevectors` and `gigamesh-featurevectors-sl`);
+  they take hours there.
 - **DEM**: `msii compute` on a generated GeoTIFF DEM (0.5 m cells in EPSG:25832, hills about
   25 m wide and 4 m high, 200 small nodata patches), R = 15 m, N = 16, the default bands
   (quality and V at R/4, R/2, 3R/4 and R: V alone is computed, from the height field), in
@@ -119,6 +133,20 @@ void addOptions(CLI::App& app, Settings& s)
     app.add_option("--exact-slab", s.exactSlab,
                    "also time the exact mode on every vertex of a closed 7 x 5 x 3 mm tablet slab with long wall and bottom "
                    "triangles (39k vertices, same spacing, R and N; default true)");
+    app.add_option("--scans", s.scans,
+                   "also time msii compute, in a process of its own and per stage, on scan-like closed slabs of ~38k "
+                   "(one thread) and ~300k vertices (two threads) at R = 25 median edges and on the tablet (two "
+                   "threads), with all four invariants and with V and S alone (default true)");
+    app.add_option("--before", s.before,
+                   "with the scans: an earlier msii build's program (\"PROGRAM [ARGS...]\"), run in turn with --msii "
+                   "on the same inputs, for before/after columns and their ratio")
+        ->type_name("COMMAND");
+    app.add_option("--gigamesh", s.gigamesh,
+                   "with the scans: also time GigaMesh's gigamesh-featurevectors (V, P) and gigamesh-featurevectors-sl "
+                   "(S, L: a run per radius each) on the ~38k-vertex scan on one CPU, against msii compute -j 1: PATH is "
+                   "the folder holding both programs (built from GigaMesh's repository with -DBUILD_GUI=OFF; not "
+                   "installed by msii; it takes hours)")
+        ->type_name("PATH");
     app.add_option("--markdown", s.markdown,
                    "also write the results as the Markdown page docs/performance.md (machine, build, command, "
                    "tables)");
@@ -135,7 +163,7 @@ std::string commandLine(int argc, char** argv, const std::string& markdown)
             continue;
         }
         if (a.rfind("--markdown=", 0) == 0) continue;
-        command += " " + a;
+        command += a.find(' ') == std::string::npos ? " " + a : " \"" + a + "\"";
     }
     command += markdown.empty() ? "" : " --markdown docs/performance.md";
     return command;
@@ -186,6 +214,8 @@ int main(int argc, char** argv)
     if ((settings.terrainPeer || !settings.rvt.empty()) && !runTerrainPeer(bench, peer)) return 1;
 
     const double generateSeconds = writeTablet(bench);
+    ScanRuns scans;
+    if (settings.scans || !settings.before.empty() || !settings.gigamesh.empty()) scans = runScans(bench);
     const TabletRuns tablet = timeTablet(bench);
     ProcessRuns processes;
     if (settings.processes) processes = runProcesses(bench, tablet);
@@ -209,6 +239,8 @@ int main(int argc, char** argv)
     const TabletExtras extras{generateSeconds, exact, slab.numVertices(), metrics, table.dimension(), props.size(),
                               maps, processes};
     printTabletTable(report, settings, tablet, extras);
+    std::fflush(stdout);
+    if (!scans.cases.empty()) printScanTables(report, settings, scans);
     std::fflush(stdout);
     if (dem.ok) printDemTable(report, dem);
     if (peer.ok) printPeerTable(report, peer);
