@@ -552,31 +552,39 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
             if (!first[j].empty()) masked.perRadius[j] += std::isnan(first[j][k]);
     }
     for (std::size_t b = 0; b < result.bands.size(); ++b) {
+        // What the band is, decided once (not per cell).
         const std::string& name = result.bands[b];
-        const FeatureColumns* columns = nullptr;
-        std::size_t radius = 0;
+        enum class Kind { Height, Column, FilledShare, Quality, ValidRadii } kind = Kind::ValidRadii;
+        const std::vector<float>* column = nullptr;
         if (name.size() > 2 && name[1] == '_' && (name[0] == 'V' || name[0] == 'S')) {
-            columns = name[0] == 'V' ? &hf.volume : &hf.sphere;
-            radius = std::size_t(std::stoi(name.substr(2)) - 1);
+            kind = Kind::Column;
+            column = &(name[0] == 'V' ? hf.volume : hf.sphere)[std::size_t(std::stoi(name.substr(2)) - 1)];
+        } else if (name == "height") {
+            kind = Kind::Height;
+        } else if (name == "filled_share") {
+            kind = Kind::FilledShare;
+        } else if (name == "quality") {
+            kind = Kind::Quality;
         }
+        std::vector<float>& out = cells[b];
         for (int y = 0; y < win.rows; ++y)
             for (int x = 0; x < win.cols; ++x) {
                 const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x),
                                   at = win.boxCell(win.col + x, win.row + y);
                 float value = nan;
-                if (name == "height") value = win.dem.heights[at];
+                if (kind == Kind::Height) value = win.dem.heights[at];
                 else if (std::isnan(filledShare[k])) value = nan;  // not on the surface
-                else if (columns) value = (*columns)[radius][k];
-                else if (name == "filled_share") value = filledShare[k];
+                else if (kind == Kind::Column) value = (*column)[k];
+                else if (kind == Kind::FilledShare) value = filledShare[k];
                 else {  // quality, valid_radii
                     int valid = 0;
                     float largest = 0.5f;
                     for (std::size_t j = nr; j-- > 0;)
                         if (j < first.size() && !first[j].empty() && !std::isnan(first[j][k]))
                             largest = valid++ == 0 ? first[j][k] : largest;
-                    value = name == "quality" ? largest : float(valid);
+                    value = kind == Kind::Quality ? largest : float(valid);
                 }
-                cells[b][at] = value;
+                out[at] = value;
             }
     }
     if (g.gapsFilled > 0) {
