@@ -43,13 +43,14 @@ public:
         mFlagged = flagged;
         const std::size_t n = flagged.size();
         mWhole.assign(n, 0), mArea.assign(n, 0), mArc.assign(n, 0);
-        mSquared.resize(n);
+        mSquared.resize(n + 1);  // and +∞ after the last, so that the counts below need no bound
         for (std::size_t k = 0; k < n; ++k) mSquared[k] = mRadii[flagged[k]] * mRadii[flagged[k]];
+        mSquared[n] = INFINITY;
         // The counts below by a table over r², of buckets narrower than the nearest two
         // flagged radii² are apart (at most kMaxBuckets): a lookup and a step or none.
         double gap = mSquared[0];
         for (std::size_t k = 1; k < n; ++k) gap = std::min(gap, mSquared[k] - mSquared[k - 1]);
-        const double top = mSquared.back();
+        const double top = mSquared[n - 1];
         const std::size_t buckets = gap > 0 ? std::size_t(std::min(double(kMaxBuckets), std::ceil(top / gap)) + 1) : 1;
         mPerSquared = double(buckets) / top;
         mBucket.resize(buckets + 1);
@@ -58,6 +59,7 @@ public:
             while (k < n && mSquared[k] * mPerSquared < double(b)) ++k;
             mBucket[b] = std::uint32_t(k);
         }
+        mLastBucket = double(buckets);
     }
 
     std::size_t size() const { return mFlagged.size(); }
@@ -67,14 +69,14 @@ public:
     std::size_t firstAbove(double x2) const
     {
         std::size_t k = guess(x2);
-        while (k < mSquared.size() && mSquared[k] <= x2) ++k;
+        while (mSquared[k] <= x2) ++k;
         return k;
     }
     /// The first flagged radius k with r_k² >= @p x2 (size() if none).
     std::size_t firstAtLeast(double x2) const
     {
         std::size_t k = guess(x2);
-        while (k < mSquared.size() && mSquared[k] < x2) ++k;
+        while (mSquared[k] < x2) ++k;
         return k;
     }
 
@@ -110,8 +112,7 @@ private:
     /// the exact count, mostly once or not at all.
     std::size_t guess(double x2) const
     {
-        const double b = x2 * mPerSquared;
-        return mBucket[b < double(mBucket.size() - 1) ? std::size_t(b) : mBucket.size() - 1];
+        return mBucket[std::size_t(std::min(x2 * mPerSquared, mLastBucket))];  // x2 >= 0
     }
 
     /// Rounded to the nearest unit (any fixed rule will do: only its sums must agree).
@@ -120,8 +121,9 @@ private:
     const std::vector<double>& mRadii;
     const double mAreaUnits, mArcUnits;
     std::vector<std::uint32_t> mFlagged;
-    std::vector<double> mSquared;  ///< of the flagged radii
+    std::vector<double> mSquared;  ///< of the flagged radii, and +∞
     double mPerSquared = 0;        ///< buckets per unit of r²
+    double mLastBucket = 0;
     std::vector<std::uint32_t> mBucket;  ///< per bucket b: the first flagged k with r_k² ≥ b / mPerSquared, about
     std::vector<Fixed> mWhole, mArea, mArc;
 };
@@ -543,7 +545,7 @@ private:
         }
         const std::size_t n = mSums.size();
         for (std::size_t j = 0; j < m; ++j) {
-            const std::size_t first = mSums.firstAbove(near2[j]);
+            const std::size_t first = mSums.firstAbove(near2[j]);  // near2 >= 0
             if (first >= n) continue;  // beyond every flagged radius
             const std::uint32_t s = s0 + std::uint32_t(j);
             const std::size_t whole = mSums.firstAtLeast(far2[j]);
