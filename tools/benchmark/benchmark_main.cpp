@@ -85,6 +85,22 @@ What the rows are:
   RVT_py's sky-view factor and openness (16 directions) and multi-scale topographic
   position at the same radius ([terrain.md](terrain.md#large-areas)).
 
+What limits the speed now, and the next steps:
+- **P and L's exact sums** (the check's flagged pairs, evaluated from the triangles) take most
+  of the time of all four invariants on the scans. Their cost is the flagged vertices times
+  the triangles within each one's largest flagged radius: it follows the share of values
+  flagged (under each scan's table) more than the mesh's size. The largest flagged radii
+  come mostly from the coarsest sample level, where P̂ and L̂ are fitted from samples to the
+  vertices. Next: kernels that err less there (fewer pairs flagged), and one walk shared by
+  neighbouring vertices.
+- **V and S**: the level set and the stencils. The level set's cost follows the surface's
+  area over the finest voxel squared, not the vertices: a slab whose walls and bottom are a
+  few long triangles pays for their area as for the top's. Next: a coarser level set where
+  no vertex is near.
+- **DEMs** on the height field: the clamps of the chords near the disc's rim, about two
+  thirds of the kernel at R = 10 cells on rolling terrain. Next: the rim's pieces as
+  annular sectors with h(ρ) integrated in closed form, so that they can be longer.
+
 This machine's timings vary from one sitting to the next, by 15–20 % within a day and by up
 to 2× between days, also in stages whose code did not change: compare builds in alternating
 runs. The accuracy of the same settings is in [accuracy.md](accuracy.md); P and L use
