@@ -79,7 +79,6 @@ struct Settings {
     std::string gigamesh;      ///< a folder holding GigaMesh's gigamesh-featurevectors and -sl
     std::string markdown;
 
-    /// Whether the invariant with letter @p c is computed.
     /// Whether --invariants (read as msii compute reads it) selects the invariant of letter @p c.
     bool has(char c) const
     {

@@ -37,11 +37,16 @@ bool runTerrainPeer(const Bench& bench, PeerRun& peer)
     const Settings& s = bench.settings;
     const fs::path& dir = bench.dir;
     const std::string tif = (dir / "peer.tif").string(), out = (dir / "peer.msii.tif").string();
+    // A failure ends the benchmark: the work folder goes with it, as in the other cases.
+    const auto fail = [&] {
+        fs::remove_all(dir);
+        return false;
+    };
     if (!runChild({s.samplesProgram, "terrain", "--geotiff", "--width", "1000", "--height", "1000", "--spacing", "1",
                    "--relief", "4", "--hill-width", "25", "--holes", "20", "--hole-size", "2", "-q", "--output", tif})
              .ok) {
         std::fprintf(stderr, "msii-benchmark: error: %s could not write the DEM\n", s.samplesProgram.c_str());
-        return false;
+        return fail();
     }
     for (const int R : {10, 30}) {
         for (const std::string engine : {"heights", "mesh"}) {
@@ -49,7 +54,7 @@ bool runTerrainPeer(const Bench& bench, PeerRun& peer)
                                          "--overwrite", "--engine", engine, "--raster-output", out});
             if (!r.ok) {
                 std::fprintf(stderr, "msii-benchmark: error: msii compute --engine %s failed on the DEM\n", engine.c_str());
-                return false;
+                return fail();
             }
             peer.rows.push_back({"msii compute -r " + std::to_string(R) + " -j 2 --engine " + engine, r.seconds, r.peakBytes});
         }
@@ -59,7 +64,7 @@ bool runTerrainPeer(const Bench& bench, PeerRun& peer)
         const std::string command = "python3 '" + script + "' '" + s.rvt + "' '" + tif + "' " + std::to_string(R) + " > '" + times + "'";
         if (std::system(command.c_str()) != 0) {
             std::fprintf(stderr, "msii-benchmark: error: RVT_py from %s did not run (%s)\n", s.rvt.c_str(), command.c_str());
-            return false;
+            return fail();
         }
         std::ifstream in(times);
         std::string name;
@@ -85,9 +90,13 @@ void printPeerTable(Report& report, const PeerRun& peer)
         report.print("| %-62s | %8.2f | %8s |\n", r.what.c_str(), r.seconds,
                      r.peakBytes > 0 ? std::to_string(int(r.peakBytes / 1e6)).c_str() : "");
     for (std::size_t k = 0; k + 1 < peer.rows.size(); ++k)
-        if (peer.rows[k].what.find("--engine heights") != std::string::npos)
-            report.print("| %-62s | %8.3f | %8s |\n", ("  heights / mesh, " + peer.rows[k].what.substr(13, 6)).c_str(),
+        if (peer.rows[k].what.find("--engine heights") != std::string::npos) {
+            // "-r R" of the row's command, whatever R's digits.
+            const std::string& what = peer.rows[k].what;
+            const std::size_t from = what.find("-r "), to = what.find(' ', from + 3);
+            report.print("| %-62s | %8.3f | %8s |\n", ("  heights / mesh, " + what.substr(from, to - from)).c_str(),
                          peer.rows[k].seconds / peer.rows[k + 1].seconds, "");
+        }
 }
 
 } // namespace msii::benchmark
