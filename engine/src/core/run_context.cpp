@@ -16,6 +16,7 @@ void RunContext::start(const std::string& stage, std::size_t total)
     mDone = 0;
     mStart = mLastReport = std::chrono::steady_clock::now();
     mActive = true;
+    mHalfwayReported = false;
     if (mListener) mListener(ProgressUpdate{mStage, 0, mTotal, 0.0, false});
 }
 
@@ -25,8 +26,16 @@ void RunContext::advance(std::size_t done)
     mDone += done;
     if (!mListener) return;
     const auto now = std::chrono::steady_clock::now();
-    std::unique_lock<std::mutex> lock(mMutex, std::try_to_lock);
-    if (!lock.owns_lock() || now - mLastReport < std::chrono::milliseconds(100)) return;
+    // At most ten reports a second, and one once past half the stage's work however fast it
+    // runs, so that a program reading the lines sees progress between start and end.
+    const std::size_t sofar = mDone.load();
+    const bool halfway = mTotal > 1 && 2 * sofar >= mTotal && sofar < mTotal;
+    std::unique_lock<std::mutex> lock(mMutex, std::defer_lock);
+    if (halfway && !mHalfwayReported) lock.lock();
+    else if (!lock.try_lock()) return;
+    const bool firstHalfway = halfway && !mHalfwayReported;
+    if (!firstHalfway && now - mLastReport < std::chrono::milliseconds(100)) return;
+    if (halfway) mHalfwayReported = true;
     mLastReport = now;
     mListener(ProgressUpdate{mStage, std::min(mDone.load(), mTotal), mTotal,
                              std::chrono::duration<double>(now - mStart).count(), false});

@@ -66,6 +66,7 @@ private:
     std::mutex mMutex;
     std::chrono::steady_clock::time_point mStart, mLastReport;
     bool mActive = false;
+    std::atomic<bool> mHalfwayReported{false};  ///< a stage reports once past half its work, however fast
     Listener mListener;
 };
 
