@@ -74,7 +74,8 @@ std::vector<Invariant> FeatureSet::invariants() const
 std::size_t FeatureSet::numVertices() const
 {
     for (const FeatureColumns& c : columns)
-        if (!c.empty()) return c.front().size();
+        for (const std::vector<float>& column : c)
+            if (!column.empty()) return column.size();  // a radius not computed has an empty column
     return 0;
 }
 

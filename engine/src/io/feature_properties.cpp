@@ -24,17 +24,17 @@ std::vector<VertexProperty> featureProperties(const FeatureSet& features)
     for (Invariant inv : features.invariants()) {
         const FeatureColumns* columns = &features[inv];
         for (std::size_t j = 0; j < columns->size(); ++j)
-            props.push_back({featureName(invariantLetter(inv), j), (*columns)[j]});
+            if (!(*columns)[j].empty()) props.push_back({featureName(invariantLetter(inv), j), (*columns)[j]});
         if (!quality) quality = columns;
     }
     if (quality) {
-        const std::size_t nv = quality->back().size();
+        const std::size_t nv = features.numVertices();
         VertexProperty value{"quality", std::vector<float>(nv, qualityStandIn(features))};
         VertexProperty count{"valid_radii", std::vector<float>(nv, 0.0f), /*integer=*/true};
         for (std::size_t i = 0; i < nv; ++i) {
             int valid = 0;
             for (std::size_t j = quality->size(); j-- > 0;)
-                if (!std::isnan((*quality)[j][i])) {
+                if (!(*quality)[j].empty() && !std::isnan((*quality)[j][i])) {
                     if (valid++ == 0) value.values[i] = (*quality)[j][i];
                 }
             count.values[i] = float(valid);

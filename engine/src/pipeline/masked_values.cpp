@@ -36,7 +36,8 @@ void MaskedValues::add(const FeatureSet& features, const std::vector<float>& fil
     if (!columns) return;
     perRadius.resize(columns->size(), 0);
     for (std::size_t j = 0; j < columns->size(); ++j)
-        for (std::uint32_t i : rows) perRadius[j] += std::isnan((*columns)[j][i]);
+        if (!(*columns)[j].empty())  // a radius not computed (a DEM's bands need a few)
+            for (std::uint32_t i : rows) perRadius[j] += std::isnan((*columns)[j][i]);
     vertices += rows.size();
 }
 

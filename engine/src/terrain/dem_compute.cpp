@@ -539,52 +539,25 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
         }
     result.triangles += 2 * squares;
     // The bands, from the columns computed (those of the radii the bands need; the others
-    // are empty): quality is the first invariant's value at the largest radius with one (a
-    // plane's ½ where none has), valid_radii how many radii have one (io/feature_properties.h).
-    const FeatureColumns& first = !hf.volume.empty() ? hf.volume : hf.sphere;
-    const std::size_t nr = w.kernel.radii.size();
-    MaskedValues& masked = result.masked;
-    masked.perRadius.resize(nr, 0);
-    masked.vertices += inFace.size();
-    for (const std::uint32_t k : inFace) {
-        masked.withFilledShare += filledShare[k] > 0;
-        for (std::size_t j = 0; j < first.size(); ++j)
-            if (!first[j].empty()) masked.perRadius[j] += std::isnan(first[j][k]);
-    }
+    // are empty and give no property, io/feature_properties.h).
+    FeatureSet features;
+    features.radii = w.kernel.radii;
+    if (!hf.volume.empty()) features[Invariant::Volume] = hf.volume;
+    if (!hf.sphere.empty()) features[Invariant::Sphere] = hf.sphere;
+    std::vector<VertexProperty> props = outputProperties(features, filledShare);
+    for (VertexProperty& p : props)
+        for (std::size_t k = 0; k < nOwn; ++k)
+            if (std::isnan(filledShare[k])) p.values[k] = nan;  // not on the surface
+    result.masked.add(features, filledShare, inFace);
     for (std::size_t b = 0; b < result.bands.size(); ++b) {
-        // What the band is, decided once (not per cell).
         const std::string& name = result.bands[b];
-        enum class Kind { Height, Column, FilledShare, Quality, ValidRadii } kind = Kind::ValidRadii;
-        const std::vector<float>* column = nullptr;
-        if (name.size() > 2 && name[1] == '_' && (name[0] == 'V' || name[0] == 'S')) {
-            kind = Kind::Column;
-            column = &(name[0] == 'V' ? hf.volume : hf.sphere)[std::size_t(std::stoi(name.substr(2)) - 1)];
-        } else if (name == "height") {
-            kind = Kind::Height;
-        } else if (name == "filled_share") {
-            kind = Kind::FilledShare;
-        } else if (name == "quality") {
-            kind = Kind::Quality;
-        }
-        std::vector<float>& out = cells[b];
+        const bool height = name == "height";  // found once per band, not per cell
+        const auto p = std::find_if(props.begin(), props.end(), [&](const VertexProperty& q) { return q.name == name; });
         for (int y = 0; y < win.rows; ++y)
             for (int x = 0; x < win.cols; ++x) {
                 const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x),
                                   at = win.boxCell(win.col + x, win.row + y);
-                float value = nan;
-                if (kind == Kind::Height) value = win.dem.heights[at];
-                else if (std::isnan(filledShare[k])) value = nan;  // not on the surface
-                else if (kind == Kind::Column) value = (*column)[k];
-                else if (kind == Kind::FilledShare) value = filledShare[k];
-                else {  // quality, valid_radii
-                    int valid = 0;
-                    float largest = 0.5f;
-                    for (std::size_t j = nr; j-- > 0;)
-                        if (j < first.size() && !first[j].empty() && !std::isnan(first[j][k]))
-                            largest = valid++ == 0 ? first[j][k] : largest;
-                    value = kind == Kind::Quality ? largest : float(valid);
-                }
-                out[at] = value;
+                cells[b][at] = height ? win.dem.heights[at] : p->values[k];
             }
     }
     if (g.gapsFilled > 0) {

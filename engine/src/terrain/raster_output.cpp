@@ -33,7 +33,7 @@ CPLStringList cogCreationOptions(bool scaled16)
     // floating-point predictor, overviews down to a tile (AUTO). Scaled integers: ZSTD with
     // the horizontal predictor and no overviews: on a DEM's default bands 0.28 of the float
     // file's size, against 0.36 with overviews (which a GIS builds when it needs them, and
-    // which a mosaic of tiles does not use). ZSTD at level 3 (zstd's own default): 6 % larger
+    // which a mosaic of tiles does not use). ZSTD at level 3 (zstd's own default): 7 % larger
     // than GDAL's default level 9 in a quarter of the time, which on a DEM's default bands
     // was a third of the whole run (docs/terrain.md, Output size).
     CPLStringList o;
