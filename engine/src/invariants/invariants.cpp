@@ -138,6 +138,8 @@ InvariantsResult planInvariants(const TriMesh& mesh, const InvariantsOptions& op
     result.plan = makeScalePlan(radii, h0, options.minVoxelsPerRadius, patchLinePrecision(options));
     result.plan.origin = localOrigin((result.stats.bboxMin + result.stats.bboxMax) * 0.5, h0);
     result.plan.vertexSpacing = result.stats.medianEdge;
+    result.plan.patchLineLevels = patchLineLevelsNearVertices(result.plan.patchLineLevels, radii, h0,
+                                                              result.plan.vertexSpacing, result.plan.patchLinePrecision);
     if (radii.front() < result.stats.medianEdge) {
         std::ostringstream msg;
         msg << "the smallest radius (" << radii.front() << ") is below the median edge length ("

@@ -333,6 +333,20 @@ void countPairs(PatchLineResult& result, const std::vector<std::vector<std::uint
 
 } // namespace
 
+std::vector<int> patchLineLevelsNearVertices(std::vector<int> levels, const std::vector<double>& radii, double h0,
+                                             double vertexSpacing, double minCellsPerRadius)
+{
+    if (!(vertexSpacing > 0)) return levels;
+    for (std::size_t j = 0; j < levels.size() && j < radii.size(); ++j)
+        while (levels[j] > 0) {
+            const double h = h0 * std::ldexp(1.0, levels[j]);
+            if (h <= kFittedCellsPerSpacing * vertexSpacing) break;  // fits without blurring
+            if (radii[j] / (0.5 * h) > kMaxCellsPerRadiusFactor * minCellsPerRadius) break;  // too many cells
+            --levels[j];
+        }
+    return levels;
+}
+
 std::vector<int> patchLineLevelOfRadius(const std::vector<double>& radii, double h0, double minCellsPerRadius)
 {
     std::vector<int> level = gridLevelOfRadius(radii, h0, minCellsPerRadius);

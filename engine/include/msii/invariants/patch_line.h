@@ -120,6 +120,17 @@ struct PatchLineResult {
 std::vector<int> patchLineLevelOfRadius(const std::vector<double>& radii, double h0,
                                         double minCellsPerRadius);
 
+/// @p levels (patchLineLevelOfRadius) with a radius whose level has cells larger than
+/// kFittedCellsPerSpacing vertex spacings @p vertexSpacing moved to finer levels, while r
+/// keeps at most kMaxCellsPerRadiusFactor × @p minCellsPerRadius of their cells: fitted from
+/// samples that coarse to the vertices, the values blur creases and onsets that the check
+/// then sends to the exact sums, so a finer level costs less in all (docs/method.md, Sample
+/// levels).
+constexpr double kFittedCellsPerSpacing = 1.5;
+constexpr double kMaxCellsPerRadiusFactor = 4;
+std::vector<int> patchLineLevelsNearVertices(std::vector<int> levels, const std::vector<double>& radii, double h0,
+                                             double vertexSpacing, double minCellsPerRadius);
+
 /// Computes P̂ and L̂ for every vertex of @p mesh at every radius.
 /// @throw InvalidInputError if radii are empty, not ascending or not positive, or the cell
 /// size is not positive or too small for the mesh's extent.
