@@ -129,13 +129,16 @@ private:
 };
 
 /// Triangles binned by centroid into cells of edge c, and these into blocks of 4 × 4 × 4
-/// cells, each block with the box around its triangles and their area, so that a block that
-/// no flagged sphere cuts is added whole and the walk about a vertex opens only those along
-/// the flagged spheres. A block's triangles are consecutive slots, each with its bounding
-/// sphere and fixed-point area in arrays of one number each (the walk's tests vectorise).
+/// cells, each block and each cell with the box around its triangles and their area, so that
+/// a block or cell that no flagged sphere cuts is added whole and the walk about a vertex
+/// opens only the blocks along the flagged spheres, and in them only the cells along them
+/// (a block's cells are about a sphere's radius long: its own would be all the ball's
+/// triangles). A cell's triangles are consecutive slots, each with its bounding sphere and
+/// fixed-point area in arrays of one number each (the walk's tests vectorise).
 class CellGrid {
 public:
-    /// A block: the box around its triangles, their fixed-point area and its slots [first, last).
+    /// A block or a cell: the box around its triangles, their fixed-point area, and its cells
+    /// (a block's) or slots (a cell's) [first, last).
     struct Box {
         Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
         Fixed area = 0;
@@ -187,18 +190,28 @@ public:
             mSlots.radius[s] = f.boundingRadius;
             for (int c = 0; c < 3; ++c) mSlots.corners[s][c] = mesh.points[mesh.triangles[t][c]];
             mSlots.area[s] = std::int64_t(units.areaUnits(f.area));
-            if (s == 0 || keyed[s].first >> 6 != keyed[s - 1].first >> 6) {
-                mKeys.push_back(keyed[s].first >> 6);
-                mBlocks.emplace_back();
-                mBlocks.back().first = std::uint32_t(s);
+            if (s == 0 || keyed[s].first != keyed[s - 1].first) {
+                if (s == 0 || keyed[s].first >> 6 != keyed[s - 1].first >> 6) {
+                    mKeys.push_back(keyed[s].first >> 6);
+                    mBlocks.emplace_back();
+                    mBlocks.back().first = std::uint32_t(mCells.size());
+                }
+                mCells.emplace_back();
+                mCells.back().first = std::uint32_t(s);
+                mBlocks.back().last = std::uint32_t(mCells.size());
             }
-            mBlocks.back().last = std::uint32_t(s + 1);
-            mBlocks.back().area += mSlots.area[s];
+            mCells.back().last = std::uint32_t(s + 1);
+            mCells.back().area += mSlots.area[s];
         }
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mBlocks.size()), [&](const auto& range) {
             for (std::size_t b = range.begin(); b < range.end(); ++b)
-                for (std::uint32_t s = mBlocks[b].first; s < mBlocks[b].last; ++s)
-                    for (const Vec3& corner : mSlots.corners[s]) grow(mBlocks[b], corner);
+                for (std::uint32_t c = mBlocks[b].first; c < mBlocks[b].last; ++c) {
+                    Box& cell = mCells[c];
+                    for (std::uint32_t s = cell.first; s < cell.last; ++s)
+                        for (const Vec3& corner : mSlots.corners[s]) grow(cell, corner);
+                    grow(mBlocks[b], cell.lo), grow(mBlocks[b], cell.hi);
+                    mBlocks[b].area += cell.area;
+                }
         });
         // Where each column (x, y) of blocks starts among the keys.
         mColumn.assign(std::size_t(mCount[0] * mCount[1]) + 1, 0);
@@ -207,6 +220,8 @@ public:
     }
 
     const Slots& slots() const { return mSlots; }
+    /// The cells of a block (Box::first, Box::last of forEachBlockNear's).
+    const Box& cell(std::uint32_t c) const { return mCells[c]; }
 
     /// Calls @p visit(block) for every block whose box may come within @p reach of @p p.
     template <class Visit> void forEachBlockNear(const Vec3& p, double reach, Visit&& visit) const
@@ -271,6 +286,7 @@ private:
     Slots mSlots;
     std::vector<std::uint64_t> mKeys;    ///< per block
     std::vector<Box> mBlocks;
+    std::vector<Box> mCells;             ///< the blocks' cells, block by block
     std::vector<std::uint32_t> mColumn;
 };
 
@@ -507,21 +523,27 @@ public:
         // counted alike one by one (the same total in any tile).
         const double margin = 1e-9 * reach;
         const std::size_t n = mSums.size();
+        // Beyond reach, whole inside from one flagged radius on (added whole), or cut by one.
+        const auto whole = [&](const CellGrid::Box& box) {
+            const auto [near, far] = boxDistances(p, box.lo, box.hi);
+            if (near >= reach) return true;
+            const double nearBelow = std::max(0.0, near - margin), farAbove = far + margin;
+            const std::size_t first = mSums.firstAbove(nearBelow * nearBelow);
+            const std::size_t inside = mSums.firstAtLeast(farAbove * farAbove);
+            if (first != inside) return false;
+            if (inside < n) mSums.addWhole(inside, box.area);
+            return true;
+        };
         for (const CellGrid& grid : grids)
             grid.forEachBlockNear(p, reach, [&](const CellGrid::Box& block) {
-                // Beyond reach, whole inside from one flagged radius on (added whole), or cut
-                // by one: then its triangles one by one.
-                const auto [near, far] = boxDistances(p, block.lo, block.hi);
-                if (near >= reach) return;
-                const double nearBelow = std::max(0.0, near - margin), farAbove = far + margin;
-                const std::size_t first = mSums.firstAbove(nearBelow * nearBelow);
-                const std::size_t whole = mSums.firstAtLeast(farAbove * farAbove);
-                if (first == whole) {
-                    if (whole < n) mSums.addWhole(whole, block.area);
-                    return;
+                if (whole(block)) return;
+                // Cut: its cells, and the triangles of those cut one by one.
+                for (std::uint32_t c = block.first; c < block.last; ++c) {
+                    const CellGrid::Box& cell = grid.cell(c);
+                    if (whole(cell)) continue;
+                    for (std::uint32_t s = cell.first; s < cell.last; s += kChunk)
+                        addTriangles(p, grid.slots(), s, std::min(cell.last, s + std::uint32_t(kChunk)), margin);
                 }
-                for (std::uint32_t s = block.first; s < block.last; s += kChunk)
-                    addTriangles(p, grid.slots(), s, std::min(block.last, s + std::uint32_t(kChunk)), margin);
             });
         flush();
     }
