@@ -112,7 +112,8 @@ private:
     /// the exact count, mostly once or not at all.
     std::size_t guess(double x2) const
     {
-        return mBucket[std::size_t(std::min(x2 * mPerSquared, mLastBucket))];  // x2 >= 0
+        // (through a 32-bit integer: one instruction, where a 64-bit unsigned one is several)
+        return mBucket[std::size_t(std::int32_t(std::min(x2 * mPerSquared, mLastBucket)))];  // x2 >= 0
     }
 
     /// Rounded to the nearest unit (any fixed rule will do: only its sums must agree).
