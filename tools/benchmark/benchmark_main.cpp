@@ -86,8 +86,9 @@ What the rows are:
   position at the same radius ([terrain.md](terrain.md#large-areas)).
 
 What limits the speed now, and the next steps:
-- **P and L's exact sums** (the check's flagged pairs, evaluated from the triangles) take most
-  of the time of all four invariants on the scans. The walk opens only the cells along the
+- **P and L's exact sums** (the check's flagged pairs, evaluated from the triangles) are the
+  largest stage on the slabs, and with the kernel sums they take most of the time of all four
+  invariants on every scan (tables above). The walk opens only the cells along the
   flagged spheres, so a pair costs about the triangles its sphere crosses: some 270 clips at
   R = 25 median edges on the 39k slab, 20 % of the stage's instructions, and 70 % in testing
   the triangles of the cells it opens (callgrind). The cost follows the share of values
