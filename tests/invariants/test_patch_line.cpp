@@ -188,8 +188,12 @@ TEST(PatchLine, LevelsStayNearTheVertexSpacing)
     const std::vector<int> fine = patchLineLevelsNearVertices(levels, radii, h0, 0.01, precision);
     for (std::size_t j = 0; j < radii.size(); ++j) {
         EXPECT_LE(fine[j], levels[j]);
-        if (fine[j] < levels[j]) EXPECT_LE(radii[j] / (h0 * std::ldexp(1.0, fine[j])), 4 * precision + 1e-9);
-        if (fine[j] > 0) EXPECT_GT(radii[j] / (h0 * std::ldexp(1.0, fine[j] - 1)), 4 * precision);
+        if (fine[j] < levels[j]) {
+            EXPECT_LE(radii[j] / (h0 * std::ldexp(1.0, fine[j])), 4 * precision + 1e-9);
+        }
+        if (fine[j] > 0) {
+            EXPECT_GT(radii[j] / (h0 * std::ldexp(1.0, fine[j] - 1)), 4 * precision);
+        }
     }
 }
 
@@ -429,9 +433,10 @@ TEST(PatchLine, TabletPatchAtTwelveCellsPerRadius)
         const int level = fast.plan.patchLineLevels[j];
         const int plain = gridLevelOfRadius({fast.plan.radii[j]}, h0, 12).front();
         EXPECT_LE(level, plain) << "r = " << fast.plan.radii[j];
-        if (level < plain)
+        if (level < plain) {
             EXPECT_LE(fast.plan.radii[j] / (0.5 * h0 * std::ldexp(1.0, level)), kMaxCellsPerRadiusFactor * 12)
                 << "r = " << fast.plan.radii[j];
+        }
     }
     ASSERT_EQ(e.nans, 0u);
     const auto& worstMean = e.worstMean;

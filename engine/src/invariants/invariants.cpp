@@ -135,11 +135,8 @@ InvariantsResult planInvariants(const TriMesh& mesh, const InvariantsOptions& op
         msg << "the voxel size " << h0 << " is far too small for a surface of area " << result.stats.area;
         throw InvalidInputError(msg.str());
     }
-    result.plan = makeScalePlan(radii, h0, options.minVoxelsPerRadius, patchLinePrecision(options));
+    result.plan = makeScalePlan(radii, h0, options.minVoxelsPerRadius, patchLinePrecision(options), result.stats.medianEdge);
     result.plan.origin = localOrigin((result.stats.bboxMin + result.stats.bboxMax) * 0.5, h0);
-    result.plan.vertexSpacing = result.stats.medianEdge;
-    result.plan.patchLineLevels = patchLineLevelsNearVertices(result.plan.patchLineLevels, radii, h0,
-                                                              result.plan.vertexSpacing, result.plan.patchLinePrecision);
     if (radii.front() < result.stats.medianEdge) {
         std::ostringstream msg;
         msg << "the smallest radius (" << radii.front() << ") is below the median edge length ("

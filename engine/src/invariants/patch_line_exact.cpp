@@ -524,8 +524,9 @@ public:
         // counted alike one by one (the same total in any tile).
         const double margin = 1e-9 * reach;
         const std::size_t n = mSums.size();
-        // Beyond reach, whole inside from one flagged radius on (added whole), or cut by one.
-        const auto whole = [&](const CellGrid::Box& box) {
+        // Whether a box is settled without its triangles: beyond reach, or whole inside from one
+        // flagged radius on (added whole); else a flagged sphere cuts it.
+        const auto settled = [&](const CellGrid::Box& box) {
             const auto [near, far] = boxDistances(p, box.lo, box.hi);
             if (near >= reach) return true;
             const double nearBelow = std::max(0.0, near - margin), farAbove = far + margin;
@@ -537,11 +538,11 @@ public:
         };
         for (const CellGrid& grid : grids)
             grid.forEachBlockNear(p, reach, [&](const CellGrid::Box& block) {
-                if (whole(block)) return;
+                if (settled(block)) return;
                 // Cut: its cells, and the triangles of those cut one by one.
                 for (std::uint32_t c = block.first; c < block.last; ++c) {
                     const CellGrid::Box& cell = grid.cell(c);
-                    if (whole(cell)) continue;
+                    if (settled(cell)) continue;
                     for (std::uint32_t s = cell.first; s < cell.last; s += kChunk)
                         addTriangles(p, grid.slots(), s, std::min(cell.last, s + std::uint32_t(kChunk)), margin);
                 }

@@ -78,7 +78,7 @@ Vec3 localOrigin(const Vec3& centre, double h0)
 }
 
 ScalePlan makeScalePlan(const std::vector<double>& radii, double h0, double volumeSpherePrecision,
-                        double patchLinePrecision)
+                        double patchLinePrecision, double vertexSpacing)
 {
     validateRadii(radii);
     if (!(h0 > 0) || !std::isfinite(h0)) throw InvalidInputError("the voxel size must be positive");
@@ -88,7 +88,9 @@ ScalePlan makeScalePlan(const std::vector<double>& radii, double h0, double volu
     plan.volumeSpherePrecision = volumeSpherePrecision;
     plan.patchLinePrecision = patchLinePrecision;
     plan.volumeSphereLevels = volumeSphereLevels(radii, h0, volumeSpherePrecision);
-    plan.patchLineLevels = patchLineLevelOfRadius(radii, h0, patchLinePrecision);
+    plan.vertexSpacing = vertexSpacing;
+    plan.patchLineLevels = patchLineLevelsNearVertices(patchLineLevelOfRadius(radii, h0, patchLinePrecision), radii,
+                                                       h0, vertexSpacing, patchLinePrecision);
     plan.reach = dependenceReach(radii, h0, std::min(volumeSpherePrecision, patchLinePrecision));
     return plan;
 }

@@ -51,7 +51,7 @@ struct ScalePlan {
     double volumeSpherePrecision = 0;        ///< V and S: voxels per radius at least
     double patchLinePrecision = 0;           ///< P and L: sample cells per radius at least
     std::vector<int> volumeSphereLevels;     ///< per radius: V and S's grid level (volumeSphereLevels)
-    std::vector<int> patchLineLevels;        ///< per radius: P and L's sample level (patchLineLevelOfRadius)
+    std::vector<int> patchLineLevels;        ///< per radius: P and L's sample level (patchLineLevelsNearVertices)
     /// How far from a vertex its values may depend on the mesh (dependenceReach at the
     /// smaller precision, whose coarser levels reach farther).
     double reach = 0;
@@ -72,9 +72,10 @@ struct ScalePlan {
 /// rounded to a multiple of 1024 h0 along each axis.
 Vec3 localOrigin(const Vec3& centre, double h0);
 
-/// The plan for @p radii with finest voxel @p h0 and the two precisions.
+/// The plan for @p radii with finest voxel @p h0, the two precisions and the whole mesh's
+/// median edge @p vertexSpacing (0: unknown, P and L's levels by precision alone).
 /// @throw InvalidInputError for invalid radii (validateRadii) or a non-positive h0.
 ScalePlan makeScalePlan(const std::vector<double>& radii, double h0, double volumeSpherePrecision,
-                        double patchLinePrecision);
+                        double patchLinePrecision, double vertexSpacing = 0);
 
 } // namespace msii
