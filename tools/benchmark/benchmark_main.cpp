@@ -112,7 +112,7 @@ What limits the speed now, and the next steps:
 This machine's timings vary from one sitting to the next, by 15–20 % within a day and by up
 to 2× between days, also in stages whose code did not change: compare builds in alternating
 runs. The accuracy of the same settings is in [accuracy.md](accuracy.md); P and L use
-8 cells per radius by default (`--pl-precision 6` is faster and less exact at sharp edges).
+8 cells per radius by default (`--pl-precision 6` is less exact at sharp edges, and no faster).
 )";
     return page;
 }

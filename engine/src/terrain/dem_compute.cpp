@@ -493,7 +493,7 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
     const int m = w.continuation.margin;
     const GridRect own{win.col - win.box[0] + m, win.row - win.box[1] + m, win.cols, win.rows};
     result.prepareSeconds += clock.seconds();
-    const HeightFieldResult hf = computeHeightField(g.grid, own, w.kernel, context);
+    HeightFieldResult hf = computeHeightField(g.grid, own, w.kernel, context);
     result.heightFieldSeconds += hf.seconds;
     clock.restart();
     // An own cell with a height is on the surface where one of its four squares has four
@@ -542,8 +542,9 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
     // are empty and give no property, io/feature_properties.h).
     FeatureSet features;
     features.radii = w.kernel.radii;
-    if (!hf.volume.empty()) features[Invariant::Volume] = hf.volume;
-    if (!hf.sphere.empty()) features[Invariant::Sphere] = hf.sphere;
+    // (moved, not copied: a window's columns are tens of MB each)
+    if (!hf.volume.empty()) features[Invariant::Volume] = std::move(hf.volume);
+    if (!hf.sphere.empty()) features[Invariant::Sphere] = std::move(hf.sphere);
     std::vector<VertexProperty> props = outputProperties(features, filledShare);
     for (VertexProperty& p : props)
         for (std::size_t k = 0; k < nOwn; ++k)
