@@ -13,6 +13,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <stdexcept>
 #include <vector>
 
 namespace msii {
@@ -313,68 +314,140 @@ MSII_LANES Lanes loadLanes(const float* p)
     std::memcpy(&v, p, sizeof v);
     return v;
 }
-MSII_LANES Lanes broadcast(float x) { return Lanes{x, x, x, x, x, x, x, x}; }
+/// A float in every lane. A macro, not a helper: GCC 12 lowers a helper's eight-float
+/// vector for the default target before inlining it into the AVX2 clone, and the AVX2 code
+/// then builds it lane by lane (eight inserts) instead of one vbroadcastss.
+#define MSII_BROADCAST(x) (float(x) - Lanes{})
 MSII_LANES Lanes maxLanes(Lanes a, Lanes b) { return a > b ? a : b; }
 MSII_LANES Lanes minLanes(Lanes a, Lanes b) { return a < b ? a : b; }
 MSII_LANES Lanes absLanes(Lanes a) { return Lanes(LaneMask(a) & 0x7fffffff); }
 
-/// A disc's taps as offsets into the padded grid of row stride s (row · s + column).
-struct DiscOffsets {
-    std::vector<std::ptrdiff_t> cell;
-    std::array<std::vector<std::ptrdiff_t>, 3> piece;
+/// The discs in ascending radius with their taps nested (docs/method.md, Height fields). A
+/// tap whose hat function lies wholly inside a disc (its four squares) has W_o = the cell's
+/// area there and in every larger disc, so Σ (z_o − z₀) over those core taps is shared: each
+/// disc adds the core taps it gains over the disc before it, then its rim taps with their own
+/// weights. The offsets are into the padded grid of row stride s (row · s + column).
+struct NestedDiscs {
+    struct Disc {
+        std::size_t index = 0;                   ///< in the discs as summed (SumRadii)
+        std::vector<std::ptrdiff_t> coreAdded;   ///< core taps not in the disc before
+        std::vector<std::ptrdiff_t> rim;         ///< the other taps
+        std::vector<float> rimWeight;            ///< their W_o
+        std::array<std::vector<std::ptrdiff_t>, 3> piece;
+        const DiscSamples* samples = nullptr;
+        int reach = 0;  ///< the largest reach of this disc and the smaller ones
+    };
+    float coreWeight = 0;  ///< W_o of a core tap: the cell's area
+    std::vector<Disc> discs;
 };
-DiscOffsets offsetsOf(const DiscSamples& d, std::ptrdiff_t stride)
+
+NestedDiscs nestDiscs(const std::vector<DiscSamples>& samples, double cw, double ch, std::ptrdiff_t stride)
 {
-    DiscOffsets o;
-    for (std::size_t i = 0; i < d.cellWeight.size(); ++i) o.cell.push_back(d.cellRow[i] * stride + d.cellColumn[i]);
-    for (std::size_t t = 0; t < 3; ++t)
-        for (std::size_t i = 0; i < d.size(); ++i) o.piece[t].push_back(d.tapRow[t][i] * stride + d.tapColumn[t][i]);
-    return o;
+    NestedDiscs nested;
+    std::vector<std::size_t> order(samples.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return samples[a].radius < samples[b].radius; });
+    // W_o of a tap whose four squares are inside: hatIntegrals adds cell/6, cell/3, cell/3 and
+    // cell/6 in that order for every such tap, at every radius.
+    const double cell = cw * ch;
+    nested.coreWeight = float(((cell / 6 + cell / 3) + cell / 3) + cell / 6);
+    std::vector<std::pair<int, int>> core;  // (row, column) of the core taps so far
+    int reach = 0;
+    for (const std::size_t k : order) {
+        const DiscSamples& d = samples[k];
+        NestedDiscs::Disc disc;
+        disc.index = k;
+        disc.samples = &d;
+        reach = std::max(reach, d.reach);
+        disc.reach = reach;
+        // A tap is core where its squares' farthest corner is inside the disc, by a margin
+        // that rounding cannot cross, and its W_o is the core weight. Both only grow with r,
+        // so the core taps of a disc are core in every larger one.
+        const double inside = d.radius * d.radius * (1 - 1e-9);
+        std::vector<std::pair<int, int>> taps;
+        for (std::size_t i = 0; i < d.cellWeight.size(); ++i) {
+            const int c = d.cellColumn[i], rw = d.cellRow[i];
+            const double farX = (std::abs(c) + 1) * cw, farY = (std::abs(rw) + 1) * ch;
+            const bool isCore = farX * farX + farY * farY <= inside && d.cellWeight[i] == nested.coreWeight;
+            const bool wasCore = std::binary_search(core.begin(), core.end(), std::make_pair(rw, c));
+            if (isCore && !wasCore)
+                taps.push_back({rw, c});
+            else if (!isCore && !wasCore) {
+                disc.rim.push_back(rw * stride + c);
+                disc.rimWeight.push_back(d.cellWeight[i]);
+            } else if (!isCore)
+                throw std::logic_error("height field: a core tap of a smaller disc is not core in a larger one");
+        }
+        std::sort(taps.begin(), taps.end());  // row-major: consecutive heights
+        for (const auto& [rw, c] : taps) disc.coreAdded.push_back(rw * stride + c);
+        core.insert(core.end(), taps.begin(), taps.end());
+        std::sort(core.begin(), core.end());
+        for (std::size_t t = 0; t < 3; ++t)
+            for (std::size_t i = 0; i < d.size(); ++i) disc.piece[t].push_back(d.tapRow[t][i] * stride + d.tapColumn[t][i]);
+        nested.discs.push_back(std::move(disc));
+    }
+    return nested;
 }
 
 /// For kLanes consecutive cells (lane k at column offset k) at heights @p z0, V(r) − ⅔πr³ of
-/// the disc @p d added to @p sums: Σ_o W_o (z_o − z₀) over the taps, then C over the pieces
-/// whose h̄ is at most the lane's largest |z_o − z₀| (a piece past it has |z − z₀| < h̄: no
-/// clamp, nothing to add; the sum of each lane depends on its own cells only, so that a cell
-/// gets the same value in every block, window and tile). @p z points at the first lane's cell
-/// in the padded grid of @p at's offsets. Compiled for AVX2 as well (chosen at run time).
-__attribute__((target_clones("avx2", "default"))) void sumDisc(const float* z, const DiscOffsets& at,
-                                                              const float* z0lanes, const DiscSamples& d,
-                                                              float* sums)
+/// the first @p count discs of @p nested, into @p sums (kLanes per disc, in that order):
+/// Σ_o W_o (z_o − z₀) over the taps, then C over the pieces whose h̄ is at most the lane's
+/// largest |z_o − z₀| over the disc's taps (a piece past it has |z − z₀| < h̄: no clamp,
+/// nothing to add). The sum of each lane depends on its own cells only, and a disc's on the
+/// discs before it only, so that a cell gets the same value in every block, window and tile,
+/// whatever the number of discs summed. @p z points at the first lane's cell in the padded
+/// grid. Compiled for AVX2 as well (chosen at run time).
+__attribute__((target_clones("avx2", "default"))) void sumDiscs(const float* z, const NestedDiscs& nested,
+                                                               const float* z0lanes, std::size_t count, float* sums)
 {
-    const Lanes z0 = loadLanes(z0lanes);
-    // Four partial sums, so that the additions do not wait for each other (a fixed order:
-    // the same result everywhere).
-    Lanes reach = broadcast(0), part[4] = {broadcast(0), broadcast(0), broadcast(0), broadcast(0)};
-    const std::size_t taps = d.cellWeight.size();
-    std::size_t i = 0;
-    for (; i + 4 <= taps; i += 4)
-        for (std::size_t u = 0; u < 4; ++u) {
-            const Lanes dz = loadLanes(z + at.cell[i + u]) - z0;
-            part[u] += broadcast(d.cellWeight[i + u]) * dz;
+    const Lanes z0 = loadLanes(z0lanes), zero = MSII_BROADCAST(0);
+    // Four partial sums over the core taps, carried from disc to disc, so that the additions
+    // do not wait for each other (a fixed order: the same result everywhere).
+    Lanes core[4] = {zero, zero, zero, zero}, coreReach = zero;
+    for (std::size_t k = 0; k < count; ++k) {
+        const NestedDiscs::Disc& disc = nested.discs[k];
+        const std::ptrdiff_t* at = disc.coreAdded.data();
+        const std::size_t added = disc.coreAdded.size();
+        std::size_t i = 0;
+        for (; i + 4 <= added; i += 4)
+            for (std::size_t u = 0; u < 4; ++u) {
+                const Lanes dz = loadLanes(z + at[i + u]) - z0;
+                core[u] += dz;
+                coreReach = maxLanes(coreReach, absLanes(dz));
+            }
+        for (; i < added; ++i) {
+            const Lanes dz = loadLanes(z + at[i]) - z0;
+            core[0] += dz;
+            coreReach = maxLanes(coreReach, absLanes(dz));
+        }
+        Lanes rim[2] = {zero, zero}, reach = coreReach;
+        const std::size_t rims = disc.rim.size();
+        for (i = 0; i < rims; ++i) {
+            const Lanes dz = loadLanes(z + disc.rim[i]) - z0;
+            rim[i & 1] += MSII_BROADCAST(disc.rimWeight[i]) * dz;
             reach = maxLanes(reach, absLanes(dz));
         }
-    for (; i < taps; ++i) {
-        const Lanes dz = loadLanes(z + at.cell[i]) - z0;
-        part[0] += broadcast(d.cellWeight[i]) * dz;
-        reach = maxLanes(reach, absLanes(dz));
+        Lanes total = MSII_BROADCAST(nested.coreWeight) * ((core[0] + core[1]) + (core[2] + core[3])) + (rim[0] + rim[1]);
+        float most = 0;
+        for (int l = 0; l < kLanes; ++l) most = std::max(most, reach[l]);
+        const DiscSamples& d = *disc.samples;
+        const std::size_t n = d.size();
+        const float* h = d.meanHalfChord.data();
+        const float* area = d.area.data();
+        const float *w0 = d.tapWeight[0].data(), *w1 = d.tapWeight[1].data(), *w2 = d.tapWeight[2].data();
+        const std::ptrdiff_t *p0 = disc.piece[0].data(), *p1 = disc.piece[1].data(), *p2 = disc.piece[2].data();
+        Lanes clamps = zero;
+        for (i = 0; i < n && h[i] <= most; ++i) {
+            const Lanes hi = MSII_BROADCAST(h[i]);
+            const Lanes below = MSII_BROADCAST(w0[i]) * loadLanes(z + p0[i]) + MSII_BROADCAST(w1[i]) * loadLanes(z + p1[i]) +
+                                MSII_BROADCAST(w2[i]) * loadLanes(z + p2[i]) - z0 + hi;
+            const Lanes clamped = minLanes(maxLanes(below, zero), hi + hi) - below;
+            clamps += Lanes(LaneMask(MSII_BROADCAST(area[i]) * clamped) & LaneMask(hi <= reach));
+        }
+        total += clamps;
+        std::memcpy(sums + k * kLanes, &total, sizeof total);
     }
-    Lanes total = (part[0] + part[1]) + (part[2] + part[3]);
-    float most = 0;
-    for (int k = 0; k < kLanes; ++k) most = std::max(most, reach[k]);
-    const std::size_t n = d.size();
-    Lanes clampParts[2] = {broadcast(0), broadcast(0)};
-    for (i = 0; i < n && d.meanHalfChord[i] <= most; ++i) {
-        const Lanes h = broadcast(d.meanHalfChord[i]);
-        const Lanes below = broadcast(d.tapWeight[0][i]) * loadLanes(z + at.piece[0][i]) +
-                            broadcast(d.tapWeight[1][i]) * loadLanes(z + at.piece[1][i]) +
-                            broadcast(d.tapWeight[2][i]) * loadLanes(z + at.piece[2][i]) - z0 + h;
-        const Lanes clamped = minLanes(maxLanes(below, broadcast(0)), h + h) - below;
-        clampParts[i & 1] += h <= reach ? broadcast(d.area[i]) * clamped : broadcast(0);
-    }
-    total += clampParts[0] + clampParts[1];
-    Lanes out = loadLanes(sums) + total;
-    std::memcpy(sums, &out, sizeof out);
 }
 
 /// What one cell of the own rectangle needs: whether every cell of its largest ball has a
@@ -466,8 +539,6 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
         const double r = sums.radius[k];
         discs[k] = discSamples(r, options.cellWidth, options.cellHeight, discSplit(r, options.cellWidth, options.cellHeight));
     });
-    int reach = 0;
-    for (const DiscSamples& d : discs) reach = std::max(reach, d.reach);
     const HeightCoverage coverage(grid);
     // The heights with kLanes columns more on the right, so that a block of lanes past the
     // own cells' last reads within the grid (those lanes are not used).
@@ -475,63 +546,63 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
     std::vector<float> padded(std::size_t(stride) * std::size_t(grid.rows), 0.0f);
     for (int row = 0; row < grid.rows; ++row)
         std::copy_n(&grid.z[std::size_t(row) * std::size_t(grid.cols)], grid.cols, &padded[std::size_t(row) * std::size_t(stride)]);
+    const NestedDiscs nested = nestDiscs(discs, options.cellWidth, options.cellHeight, stride);
+    const std::size_t discCount = nested.discs.size();
+    const int reach = nested.discs.back().reach;
+    // Where the volume of summed disc s (SumRadii's index) is, in the nested order.
+    std::vector<std::size_t> slot(discCount);
+    for (std::size_t k = 0; k < discCount; ++k) slot[nested.discs[k].index] = k;
 
-    std::vector<DiscOffsets> offsets;
-    for (const DiscSamples& d : discs) offsets.push_back(offsetsOf(d, stride));
     if (context) context->start("V and S from the heights", std::size_t(own.rows));
     tbb::parallel_for(tbb::blocked_range<int>(0, own.rows), [&](const tbb::blocked_range<int>& range) {
-        std::vector<float> volume(sums.radius.size() * kLanes);
-        std::vector<char> complete(discs.size() * kLanes);
+        std::vector<float> volume(discCount * kLanes), one(discCount * kLanes);
+        std::size_t complete[kLanes];  // per lane: the discs, in the nested order, it has every height of
         for (int r = range.begin(); r < range.end(); ++r) {
             const int row = own.row + r;
             for (int c = 0; c < own.cols; c += kLanes) {
                 const int lanes = std::min(kLanes, own.cols - c);
-                // Per disc and lane: whether every cell the disc reads has a height.
-                float z0[kLanes];
                 bool all = true, any = false;
-                for (std::size_t s = 0; s < discs.size(); ++s)
-                    for (int k = 0; k < kLanes; ++k) {
-                        const bool ok = k < lanes && coverage.complete(own.col + c + k, row, discs[s].reach, grid.rows);
-                        complete[s * kLanes + std::size_t(k)] = ok;
-                        all = all && (ok || k >= lanes);
-                        any = any || ok;
-                    }
+                for (int k = 0; k < kLanes; ++k) {
+                    std::size_t m = 0;
+                    while (k < lanes && m < discCount &&
+                           coverage.complete(own.col + c + k, row, nested.discs[m].reach, grid.rows))
+                        ++m;
+                    complete[k] = m;
+                    all = all && (m == discCount || k >= lanes);
+                    any = any || m > 0;
+                }
                 if (!any) continue;
+                float z0[kLanes];
                 for (int k = 0; k < kLanes; ++k) z0[k] = k < lanes ? grid.at(own.col + c + k, row) : 0.0f;
-                std::fill(volume.begin(), volume.end(), 0.0f);
                 const float* at = &padded[std::size_t(row) * std::size_t(stride) + std::size_t(own.col + c)];
                 const bool inside = all && own.col + c - reach >= 0 && own.col + c + reach < grid.cols && row - reach >= 0 &&
                                     row + reach < grid.rows;
-                for (std::size_t s = 0; s < discs.size(); ++s) {
-                    if (inside) {
-                        sumDisc(at, offsets[s], z0, discs[s], &volume[s * kLanes]);
-                        continue;
-                    }
-                    // Near the grid's edge or a gap: each lane whose disc is complete alone, as
-                    // lane 0 of a block whose other lanes read its neighbours within the
-                    // padding, unused.
+                if (inside) {
+                    sumDiscs(at, nested, z0, discCount, volume.data());
+                } else {
+                    // Near the grid's edge or a gap: each lane alone, over the discs it has
+                    // every height of, as lane 0 of a block whose other lanes read its
+                    // neighbours within the padding, unused.
                     for (int k = 0; k < lanes; ++k) {
-                        if (!complete[s * kLanes + std::size_t(k)]) continue;
-                        float one[kLanes] = {}, lane0[kLanes];
+                        if (complete[k] == 0) continue;
+                        float lane0[kLanes];
                         std::fill(lane0, lane0 + kLanes, z0[k]);
-                        sumDisc(at + k, offsets[s], lane0, discs[s], one);
-                        volume[s * kLanes + std::size_t(k)] = one[0];
+                        sumDiscs(at + k, nested, lane0, complete[k], one.data());
+                        for (std::size_t s = 0; s < complete[k]; ++s) volume[s * kLanes + std::size_t(k)] = one[s * kLanes];
                     }
                 }
-                const auto done = [&](int s, int k) { return s >= 0 && complete[std::size_t(s) * kLanes + std::size_t(k)]; };
+                const auto done = [&](int s, int k) { return s >= 0 && slot[std::size_t(s)] < complete[k]; };
+                const auto sum = [&](int s, int k) { return double(volume[slot[std::size_t(s)] * kLanes + std::size_t(k)]); };
                 for (int k = 0; k < lanes; ++k) {
                     const std::size_t cell = std::size_t(r) * std::size_t(own.cols) + std::size_t(c + k);
                     for (std::size_t j = 0; j < n; ++j) {
                         const double rj = options.radii[j];
                         if (done(sums.volumeOf[j], k))
-                            result.volume[j][cell] =
-                                float(0.5 + double(volume[std::size_t(sums.volumeOf[j]) * kLanes + std::size_t(k)]) /
-                                                (4.0 / 3.0 * kPi * rj * rj * rj));
+                            result.volume[j][cell] = float(0.5 + sum(sums.volumeOf[j], k) / (4.0 / 3.0 * kPi * rj * rj * rj));
                         if (done(sums.belowOf[j], k) && done(sums.aboveOf[j], k)) {
                             const double below = sums.radius[std::size_t(sums.belowOf[j])],
                                          above = sums.radius[std::size_t(sums.aboveOf[j])];
-                            const double dv = double(volume[std::size_t(sums.aboveOf[j]) * kLanes + std::size_t(k)]) -
-                                              double(volume[std::size_t(sums.belowOf[j]) * kLanes + std::size_t(k)]);
+                            const double dv = sum(sums.aboveOf[j], k) - sum(sums.belowOf[j], k);
                             result.sphere[j][cell] =
                                 float(0.5 + dv / (4.0 / 3.0 * kPi * (above * above * above - below * below * below)));
                         }
