@@ -14,6 +14,7 @@
 #include <limits>
 #include <map>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace msii {
@@ -322,28 +323,45 @@ MSII_LANES Lanes maxLanes(Lanes a, Lanes b) { return a > b ? a : b; }
 MSII_LANES Lanes minLanes(Lanes a, Lanes b) { return a < b ? a : b; }
 MSII_LANES Lanes absLanes(Lanes a) { return Lanes(LaneMask(a) & 0x7fffffff); }
 
-/// The discs in ascending radius with their taps nested (docs/method.md, Height fields). A
-/// tap whose hat function lies wholly inside a disc (its four squares) has W_o = the cell's
-/// area there and in every larger disc, so Σ (z_o − z₀) over those core taps is shared: each
-/// disc adds the core taps it gains over the disc before it, then its rim taps with their own
-/// weights. The offsets are into the padded grid of row stride s (row · s + column).
-struct NestedDiscs {
-    struct Disc {
-        std::size_t index = 0;                   ///< in the discs as summed (SumRadii)
-        std::vector<std::ptrdiff_t> coreAdded;   ///< core taps not in the disc before
-        std::vector<std::ptrdiff_t> rim;         ///< the other taps
-        std::vector<float> rimWeight;            ///< their W_o
-        std::array<std::vector<std::ptrdiff_t>, 3> piece;
-        const DiscSamples* samples = nullptr;
-        int reach = 0;  ///< the largest reach of this disc and the smaller ones
-    };
-    float coreWeight = 0;  ///< W_o of a core tap: the cell's area
-    std::vector<Disc> discs;
+/// Eight 64-bit integers and eight doubles, one per lane.
+typedef long long LaneInts __attribute__((vector_size(64)));
+typedef long long LaneQuads __attribute__((vector_size(32)));
+typedef double LaneDoubles __attribute__((vector_size(64)));
+
+/// Heights as integers of 2⁻²³ m (1.2e-7 m) for the sums over whole rows of cells: a row's
+/// sum is the difference of two prefix sums, exact in 64 bits, so that a cell's sum is the
+/// same in every window whatever the window's first column.
+constexpr double kHeightScale = 8388608.0;
+
+/// A disc summed by rows of cells (docs/method.md, Height fields):
+/// - the core taps, whose hat functions lie inside the disc (W_o = the cell's area): a run of
+///   cells per row, summed from the rows' prefix sums of the heights;
+/// - the other taps with their W_o, one by one;
+/// - the largest |z_o − z₀| over the taps, from the largest and smallest height of runs of
+///   eight cells, over the taps that the disc before it (in ascending radius) does not have;
+/// - the pieces for C, as in DiscSamples.
+/// Offsets are into the padded grid of row stride s (row · s + column), and into the prefix
+/// sums of row stride s + 1.
+struct DiscPlan {
+    std::size_t index = 0;  ///< in the discs as summed (SumRadii)
+    const DiscSamples* samples = nullptr;
+    int reach = 0;  ///< the largest reach of this disc and the smaller ones
+    std::vector<std::ptrdiff_t> coreFrom, coreTo;  ///< per row: prefix sums before the run and past it
+    double coreCount = 0;                          ///< core taps
+    std::vector<std::ptrdiff_t> runAt, cellAt;     ///< new taps: runs of eight cells, single cells
+    std::vector<std::ptrdiff_t> rim;               ///< the taps that are not core
+    std::vector<float> rimWeight;                  ///< their W_o
+    std::array<std::vector<std::ptrdiff_t>, 3> piece;
 };
 
-NestedDiscs nestDiscs(const std::vector<DiscSamples>& samples, double cw, double ch, std::ptrdiff_t stride)
+struct DiscPlans {
+    float coreWeight = 0;  ///< W_o of a core tap: the cell's area
+    std::vector<DiscPlan> discs;  ///< ascending radius
+};
+
+DiscPlans planDiscs(const std::vector<DiscSamples>& samples, double cw, double ch, std::ptrdiff_t stride)
 {
-    NestedDiscs nested;
+    DiscPlans plans;
     std::vector<std::size_t> order(samples.size());
     for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
     std::stable_sort(order.begin(), order.end(),
@@ -351,84 +369,137 @@ NestedDiscs nestDiscs(const std::vector<DiscSamples>& samples, double cw, double
     // W_o of a tap whose four squares are inside: hatIntegrals adds cell/6, cell/3, cell/3 and
     // cell/6 in that order for every such tap, at every radius.
     const double cell = cw * ch;
-    nested.coreWeight = float(((cell / 6 + cell / 3) + cell / 3) + cell / 6);
-    std::vector<std::pair<int, int>> core;  // (row, column) of the core taps so far
+    plans.coreWeight = float(((cell / 6 + cell / 3) + cell / 3) + cell / 6);
+    const std::ptrdiff_t prefixStride = stride + 1;
+    std::map<int, std::pair<int, int>> before;  // the taps of the disc before: row → first and last column
     int reach = 0;
+    const auto fail = [] { throw std::logic_error("height field: a disc's taps are not runs of cells nested by radius"); };
     for (const std::size_t k : order) {
         const DiscSamples& d = samples[k];
-        NestedDiscs::Disc disc;
-        disc.index = k;
-        disc.samples = &d;
+        DiscPlan plan;
+        plan.index = k;
+        plan.samples = &d;
         reach = std::max(reach, d.reach);
-        disc.reach = reach;
+        plan.reach = reach;
+        std::map<int, std::vector<std::pair<int, float>>> rows;  // row → (column, W_o), column ascending
+        for (std::size_t i = 0; i < d.cellWeight.size(); ++i) rows[d.cellRow[i]].push_back({d.cellColumn[i], d.cellWeight[i]});
         // A tap is core where its squares' farthest corner is inside the disc, by a margin
-        // that rounding cannot cross, and its W_o is the core weight. Both only grow with r,
-        // so the core taps of a disc are core in every larger one.
+        // that rounding cannot cross, and its W_o is the core weight.
         const double inside = d.radius * d.radius * (1 - 1e-9);
-        std::vector<std::pair<int, int>> taps;
-        for (std::size_t i = 0; i < d.cellWeight.size(); ++i) {
-            const int c = d.cellColumn[i], rw = d.cellRow[i];
-            const double farX = (std::abs(c) + 1) * cw, farY = (std::abs(rw) + 1) * ch;
-            const bool isCore = farX * farX + farY * farY <= inside && d.cellWeight[i] == nested.coreWeight;
-            const bool wasCore = std::binary_search(core.begin(), core.end(), std::make_pair(rw, c));
-            if (isCore && !wasCore)
-                taps.push_back({rw, c});
-            else if (!isCore && !wasCore) {
-                disc.rim.push_back(rw * stride + c);
-                disc.rimWeight.push_back(d.cellWeight[i]);
-            } else if (!isCore)
-                throw std::logic_error("height field: a core tap of a smaller disc is not core in a larger one");
+        std::map<int, std::pair<int, int>> taps;
+        for (auto& [rw, cols] : rows) {
+            std::sort(cols.begin(), cols.end());
+            const int first = cols.front().first, last = cols.back().first;
+            if (last - first + 1 != int(cols.size())) fail();
+            taps[rw] = {first, last};
+            int coreFirst = 1, coreLast = 0;
+            for (const auto& [c, w] : cols) {
+                const double farX = (std::abs(c) + 1) * cw, farY = (std::abs(rw) + 1) * ch;
+                if (farX * farX + farY * farY <= inside && w == plans.coreWeight) {
+                    if (coreFirst > coreLast)
+                        coreFirst = coreLast = c;
+                    else if (c == coreLast + 1)
+                        coreLast = c;
+                    else
+                        fail();
+                } else {
+                    plan.rim.push_back(rw * stride + c);
+                    plan.rimWeight.push_back(w);
+                }
+            }
+            if (coreFirst <= coreLast) {
+                plan.coreFrom.push_back(rw * prefixStride + coreFirst);
+                plan.coreTo.push_back(rw * prefixStride + coreLast + 1);
+                plan.coreCount += coreLast - coreFirst + 1;
+            }
+            // The taps that the disc before does not have: up to two runs in this row.
+            const auto addRun = [&](int a, int b) {
+                if (b - a + 1 < 8) {
+                    for (int c = a; c <= b; ++c) plan.cellAt.push_back(rw * stride + c);
+                    return;
+                }
+                int c = a;
+                for (; c + 8 <= b + 1; c += 8) plan.runAt.push_back(rw * stride + c);
+                if (c <= b) plan.runAt.push_back(rw * stride + b - 7);
+            };
+            const auto previous = before.find(rw);
+            if (previous == before.end()) {
+                addRun(first, last);
+            } else {
+                const auto [a, b] = previous->second;
+                if (a < first || b > last) fail();
+                if (first < a) addRun(first, a - 1);
+                if (b < last) addRun(b + 1, last);
+            }
         }
-        std::sort(taps.begin(), taps.end());  // row-major: consecutive heights
-        for (const auto& [rw, c] : taps) disc.coreAdded.push_back(rw * stride + c);
-        core.insert(core.end(), taps.begin(), taps.end());
-        std::sort(core.begin(), core.end());
+        for (const auto& [rw, run] : before)
+            if (!taps.count(rw)) fail();
+        before = std::move(taps);
         for (std::size_t t = 0; t < 3; ++t)
-            for (std::size_t i = 0; i < d.size(); ++i) disc.piece[t].push_back(d.tapRow[t][i] * stride + d.tapColumn[t][i]);
-        nested.discs.push_back(std::move(disc));
+            for (std::size_t i = 0; i < d.size(); ++i) plan.piece[t].push_back(d.tapRow[t][i] * stride + d.tapColumn[t][i]);
+        plans.discs.push_back(std::move(plan));
     }
-    return nested;
+    return plans;
 }
 
+/// What sumDiscs reads, all in the padded grid's rows (the prefix sums one column longer).
+struct DiscGrid {
+    const float* z;          ///< the first lane's height
+    const float* runHigh;    ///< the largest height of the eight cells from here
+    const float* runLow;     ///< and the smallest
+    const long long* prefix; ///< Σ of the row's heights before here, in 2⁻²³ m
+};
+
 /// For kLanes consecutive cells (lane k at column offset k) at heights @p z0, V(r) − ⅔πr³ of
-/// the first @p count discs of @p nested, into @p sums (kLanes per disc, in that order):
+/// the first @p count discs of @p plans, into @p sums (kLanes per disc, in that order):
 /// Σ_o W_o (z_o − z₀) over the taps, then C over the pieces whose h̄ is at most the lane's
 /// largest |z_o − z₀| over the disc's taps (a piece past it has |z − z₀| < h̄: no clamp,
 /// nothing to add). The sum of each lane depends on its own cells only, and a disc's on the
 /// discs before it only, so that a cell gets the same value in every block, window and tile,
-/// whatever the number of discs summed. @p z points at the first lane's cell in the padded
-/// grid. Compiled for AVX2 as well (chosen at run time).
-__attribute__((target_clones("avx2", "default"))) void sumDiscs(const float* z, const NestedDiscs& nested,
-                                                               const float* z0lanes, std::size_t count, float* sums)
+/// whatever the number of discs summed. Compiled for AVX2 as well (chosen at run time).
+__attribute__((target_clones("avx2", "default"))) void sumDiscs(const DiscGrid& g, const DiscPlans& plans,
+                                                               const float* z0lanes, std::size_t count, double* sums)
 {
     const Lanes z0 = loadLanes(z0lanes), zero = MSII_BROADCAST(0);
-    // Four partial sums over the core taps, carried from disc to disc, so that the additions
-    // do not wait for each other (a fixed order: the same result everywhere).
-    Lanes core[4] = {zero, zero, zero, zero}, coreReach = zero;
+    const LaneDoubles z0wide = __builtin_convertvector(z0, LaneDoubles);
+    const float* z = g.z;
+    // The largest and smallest height over the taps so far (disc by disc, nested): the
+    // largest |z_o − z₀| is the larger of high − z₀ and z₀ − low, rounded alike.
+    Lanes high = z0, low = z0;
     for (std::size_t k = 0; k < count; ++k) {
-        const NestedDiscs::Disc& disc = nested.discs[k];
-        const std::ptrdiff_t* at = disc.coreAdded.data();
-        const std::size_t added = disc.coreAdded.size();
-        std::size_t i = 0;
-        for (; i + 4 <= added; i += 4)
-            for (std::size_t u = 0; u < 4; ++u) {
-                const Lanes dz = loadLanes(z + at[i + u]) - z0;
-                core[u] += dz;
-                coreReach = maxLanes(coreReach, absLanes(dz));
-            }
-        for (; i < added; ++i) {
-            const Lanes dz = loadLanes(z + at[i]) - z0;
-            core[0] += dz;
-            coreReach = maxLanes(coreReach, absLanes(dz));
+        const DiscPlan& disc = plans.discs[k];
+        for (const std::ptrdiff_t at : disc.runAt) {
+            high = maxLanes(high, loadLanes(g.runHigh + at));
+            low = minLanes(low, loadLanes(g.runLow + at));
         }
-        Lanes rim[2] = {zero, zero}, reach = coreReach;
+        for (const std::ptrdiff_t at : disc.cellAt) {
+            const Lanes v = loadLanes(z + at);
+            high = maxLanes(high, v);
+            low = minLanes(low, v);
+        }
+        const Lanes reach = maxLanes(high - z0, z0 - low);
+        // Two halves of four lanes, each a register in the AVX2 clone (a vector of eight
+        // lives on the stack there).
+        LaneQuads coreLeft = {}, coreRight = {};
+        const std::size_t rows = disc.coreFrom.size();
+        for (std::size_t i = 0; i < rows; ++i) {
+            const long long *to = g.prefix + disc.coreTo[i], *from = g.prefix + disc.coreFrom[i];
+            LaneQuads toLeft, toRight, fromLeft, fromRight;
+            std::memcpy(&toLeft, to, sizeof toLeft);
+            std::memcpy(&toRight, to + 4, sizeof toRight);
+            std::memcpy(&fromLeft, from, sizeof fromLeft);
+            std::memcpy(&fromRight, from + 4, sizeof fromRight);
+            coreLeft += toLeft - fromLeft;
+            coreRight += toRight - fromRight;
+        }
         const std::size_t rims = disc.rim.size();
-        for (i = 0; i < rims; ++i) {
-            const Lanes dz = loadLanes(z + disc.rim[i]) - z0;
-            rim[i & 1] += MSII_BROADCAST(disc.rimWeight[i]) * dz;
-            reach = maxLanes(reach, absLanes(dz));
+        Lanes rimEven = zero, rimOdd = zero;
+        std::size_t i = 0;
+        for (; i + 2 <= rims; i += 2) {
+            rimEven += MSII_BROADCAST(disc.rimWeight[i]) * (loadLanes(z + disc.rim[i]) - z0);
+            rimOdd += MSII_BROADCAST(disc.rimWeight[i + 1]) * (loadLanes(z + disc.rim[i + 1]) - z0);
         }
-        Lanes total = MSII_BROADCAST(nested.coreWeight) * ((core[0] + core[1]) + (core[2] + core[3])) + (rim[0] + rim[1]);
+        if (i < rims) rimEven += MSII_BROADCAST(disc.rimWeight[i]) * (loadLanes(z + disc.rim[i]) - z0);
         float most = 0;
         for (int l = 0; l < kLanes; ++l) most = std::max(most, reach[l]);
         const DiscSamples& d = *disc.samples;
@@ -445,7 +516,12 @@ __attribute__((target_clones("avx2", "default"))) void sumDiscs(const float* z, 
             const Lanes clamped = minLanes(maxLanes(below, zero), hi + hi) - below;
             clamps += Lanes(LaneMask(MSII_BROADCAST(area[i]) * clamped) & LaneMask(hi <= reach));
         }
-        total += clamps;
+        LaneInts core;
+        std::memcpy(&core, &coreLeft, sizeof coreLeft);
+        std::memcpy(reinterpret_cast<char*>(&core) + sizeof coreLeft, &coreRight, sizeof coreRight);
+        const LaneDoubles coreSum = __builtin_convertvector(core, LaneDoubles) * (1 / kHeightScale) - disc.coreCount * z0wide;
+        const LaneDoubles total = double(plans.coreWeight) * coreSum + __builtin_convertvector(rimEven + rimOdd, LaneDoubles) +
+                                  __builtin_convertvector(clamps, LaneDoubles);
         std::memcpy(sums + k * kLanes, &total, sizeof total);
     }
 }
@@ -511,6 +587,14 @@ void validate(const HeightGrid& grid, const GridRect& own, const HeightFieldOpti
         throw InvalidInputError("the cells to compute lie outside the height grid");
     if (grid.z.size() != std::size_t(grid.cols) * std::size_t(grid.rows))
         throw InvalidInputError("the height grid's size does not match its columns and rows");
+    // The rows' sums of heights in 2⁻²³ m must fit in 64 bits (sumDiscs).
+    float highest = 0;
+    for (const float z : grid.z)
+        if (!std::isnan(z)) highest = std::max(highest, std::abs(z));
+    if (!(double(highest) * kHeightScale * (double(grid.cols) + kLanes + 1) < 0x1p62))
+        throw InvalidInputError("heights of " + std::to_string(highest) + " are beyond what the height field sums (at most " +
+                                std::to_string(0x1p62 / kHeightScale / (double(grid.cols) + kLanes + 1)) +
+                                " in a row of this length)");
 }
 
 } // namespace
@@ -546,16 +630,36 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
     std::vector<float> padded(std::size_t(stride) * std::size_t(grid.rows), 0.0f);
     for (int row = 0; row < grid.rows; ++row)
         std::copy_n(&grid.z[std::size_t(row) * std::size_t(grid.cols)], grid.cols, &padded[std::size_t(row) * std::size_t(stride)]);
-    const NestedDiscs nested = nestDiscs(discs, options.cellWidth, options.cellHeight, stride);
-    const std::size_t discCount = nested.discs.size();
-    const int reach = nested.discs.back().reach;
-    // Where the volume of summed disc s (SumRadii's index) is, in the nested order.
+    // Cells without a height take 0 in the padded grid (a disc that reads one gets no value).
+    // Per padded cell: the largest and smallest height of the eight cells from it, and per
+    // row the prefix sums of the heights in 2⁻²³ m.
+    const std::ptrdiff_t prefixStride = stride + 1;
+    std::vector<float> runHigh(padded.size()), runLow(padded.size());
+    std::vector<long long> prefix(std::size_t(prefixStride) * std::size_t(grid.rows));
+    tbb::parallel_for(0, grid.rows, [&](int row) {
+        float* z = &padded[std::size_t(row) * std::size_t(stride)];
+        for (std::ptrdiff_t c = 0; c < stride; ++c)
+            if (std::isnan(z[c])) z[c] = 0;
+        long long* sum = &prefix[std::size_t(row) * std::size_t(prefixStride)];
+        sum[0] = 0;
+        for (std::ptrdiff_t c = 0; c < stride; ++c) sum[c + 1] = sum[c] + std::llrint(double(z[c]) * kHeightScale);
+        float* high = &runHigh[std::size_t(row) * std::size_t(stride)];
+        float* low = &runLow[std::size_t(row) * std::size_t(stride)];
+        std::copy_n(z, stride, high);
+        std::copy_n(z, stride, low);
+        for (std::ptrdiff_t k = 1; k < 8; ++k)
+            for (std::ptrdiff_t c = 0; c + k < stride; ++c) high[c] = std::max(high[c], z[c + k]), low[c] = std::min(low[c], z[c + k]);
+    });
+    const DiscPlans plans = planDiscs(discs, options.cellWidth, options.cellHeight, stride);
+    const std::size_t discCount = plans.discs.size();
+    const int reach = plans.discs.back().reach;
+    // Where the volume of summed disc s (SumRadii's index) is, in the plans' order.
     std::vector<std::size_t> slot(discCount);
-    for (std::size_t k = 0; k < discCount; ++k) slot[nested.discs[k].index] = k;
+    for (std::size_t k = 0; k < discCount; ++k) slot[plans.discs[k].index] = k;
 
     if (context) context->start("V and S from the heights", std::size_t(own.rows));
     tbb::parallel_for(tbb::blocked_range<int>(0, own.rows), [&](const tbb::blocked_range<int>& range) {
-        std::vector<float> volume(discCount * kLanes), one(discCount * kLanes);
+        std::vector<double> volume(discCount * kLanes), one(discCount * kLanes);
         std::size_t complete[kLanes];  // per lane: the discs, in the nested order, it has every height of
         for (int r = range.begin(); r < range.end(); ++r) {
             const int row = own.row + r;
@@ -563,10 +667,15 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
                 const int lanes = std::min(kLanes, own.cols - c);
                 bool all = true, any = false;
                 for (int k = 0; k < kLanes; ++k) {
+                    // Most cells have every height of the largest disc: that is tried first.
+                    const auto has = [&](std::size_t m) {
+                        return coverage.complete(own.col + c + k, row, plans.discs[m].reach, grid.rows);
+                    };
                     std::size_t m = 0;
-                    while (k < lanes && m < discCount &&
-                           coverage.complete(own.col + c + k, row, nested.discs[m].reach, grid.rows))
-                        ++m;
+                    if (k < lanes && has(discCount - 1))
+                        m = discCount;
+                    else
+                        while (k < lanes && m + 1 < discCount && has(m)) ++m;
                     complete[k] = m;
                     all = all && (m == discCount || k >= lanes);
                     any = any || m > 0;
@@ -574,11 +683,13 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
                 if (!any) continue;
                 float z0[kLanes];
                 for (int k = 0; k < kLanes; ++k) z0[k] = k < lanes ? grid.at(own.col + c + k, row) : 0.0f;
-                const float* at = &padded[std::size_t(row) * std::size_t(stride) + std::size_t(own.col + c)];
+                const std::size_t at = std::size_t(row) * std::size_t(stride) + std::size_t(own.col + c);
+                const DiscGrid blockGrid{&padded[at], &runHigh[at], &runLow[at],
+                                         &prefix[std::size_t(row) * std::size_t(prefixStride) + std::size_t(own.col + c)]};
                 const bool inside = all && own.col + c - reach >= 0 && own.col + c + reach < grid.cols && row - reach >= 0 &&
                                     row + reach < grid.rows;
                 if (inside) {
-                    sumDiscs(at, nested, z0, discCount, volume.data());
+                    sumDiscs(blockGrid, plans, z0, discCount, volume.data());
                 } else {
                     // Near the grid's edge or a gap: each lane alone, over the discs it has
                     // every height of, as lane 0 of a block whose other lanes read its
@@ -587,12 +698,13 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
                         if (complete[k] == 0) continue;
                         float lane0[kLanes];
                         std::fill(lane0, lane0 + kLanes, z0[k]);
-                        sumDiscs(at + k, nested, lane0, complete[k], one.data());
+                        const DiscGrid laneGrid{blockGrid.z + k, blockGrid.runHigh + k, blockGrid.runLow + k, blockGrid.prefix + k};
+                        sumDiscs(laneGrid, plans, lane0, complete[k], one.data());
                         for (std::size_t s = 0; s < complete[k]; ++s) volume[s * kLanes + std::size_t(k)] = one[s * kLanes];
                     }
                 }
                 const auto done = [&](int s, int k) { return s >= 0 && slot[std::size_t(s)] < complete[k]; };
-                const auto sum = [&](int s, int k) { return double(volume[slot[std::size_t(s)] * kLanes + std::size_t(k)]); };
+                const auto sum = [&](int s, int k) { return volume[slot[std::size_t(s)] * kLanes + std::size_t(k)]; };
                 for (int k = 0; k < lanes; ++k) {
                     const std::size_t cell = std::size_t(r) * std::size_t(own.cols) + std::size_t(c + k);
                     for (std::size_t j = 0; j < n; ++j) {
