@@ -2,6 +2,9 @@
 
 #include <msii/core/errors.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -17,37 +20,63 @@ std::string featureName(char letter, std::size_t j)
     return std::string(1, letter) + (digits.size() < 2 ? "_0" : "_") + digits;
 }
 
-std::vector<VertexProperty> featureProperties(const FeatureSet& features)
+namespace {
+
+/// featureProperties: the columns copied, or moved out of @p movable (the same set) where given.
+std::vector<VertexProperty> propertiesOf(const FeatureSet& features, FeatureSet* movable)
 {
     std::vector<VertexProperty> props;
-    const FeatureColumns* quality = nullptr;
-    for (Invariant inv : features.invariants()) {
-        const FeatureColumns* columns = &features[inv];
-        for (std::size_t j = 0; j < columns->size(); ++j)
-            if (!(*columns)[j].empty()) props.push_back({featureName(invariantLetter(inv), j), (*columns)[j]});
-        if (!quality) quality = columns;
-    }
+    const std::vector<Invariant> invariants = features.invariants();
+    const FeatureColumns* quality = invariants.empty() ? nullptr : &features[invariants.front()];
+    // quality and valid_radii first (from the first invariant's columns, before they move),
+    // placed after the columns.
+    std::vector<VertexProperty> tail;
     if (quality) {
         const std::size_t nv = features.numVertices();
         VertexProperty value{"quality", std::vector<float>(nv, qualityStandIn(features))};
         VertexProperty count{"valid_radii", std::vector<float>(nv, 0.0f), /*integer=*/true};
-        for (std::size_t i = 0; i < nv; ++i) {
-            int valid = 0;
-            for (std::size_t j = quality->size(); j-- > 0;)
-                if (!(*quality)[j].empty() && !std::isnan((*quality)[j][i])) {
-                    if (valid++ == 0) value.values[i] = (*quality)[j][i];
-                }
-            count.values[i] = float(valid);
-        }
-        props.push_back(std::move(value));
-        props.push_back(std::move(count));
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                int valid = 0;
+                for (std::size_t j = quality->size(); j-- > 0;)
+                    if (!(*quality)[j].empty() && !std::isnan((*quality)[j][i])) {
+                        if (valid++ == 0) value.values[i] = (*quality)[j][i];
+                    }
+                count.values[i] = float(valid);
+            }
+        });
+        tail.push_back(std::move(value));
+        tail.push_back(std::move(count));
     }
+    for (Invariant inv : features.invariants()) {
+        const FeatureColumns& columns = features[inv];
+        for (std::size_t j = 0; j < columns.size(); ++j)
+            if (!columns[j].empty())
+                props.push_back({featureName(invariantLetter(inv), j), movable ? std::move((*movable)[inv][j]) : columns[j]});
+    }
+    for (VertexProperty& p : tail) props.push_back(std::move(p));
     return props;
 }
+
+} // namespace
+
+std::vector<VertexProperty> featureProperties(const FeatureSet& features)
+{
+    return propertiesOf(features, nullptr);
+}
+
+std::vector<VertexProperty> featureProperties(FeatureSet&& features) { return propertiesOf(features, &features); }
 
 std::vector<VertexProperty> outputProperties(const FeatureSet& features, std::vector<float> filledShare)
 {
     std::vector<VertexProperty> props = featureProperties(features);
+    if (!filledShare.empty()) props.push_back({"filled_share", std::move(filledShare)});
+    return props;
+}
+
+std::vector<VertexProperty> outputProperties(FeatureSet&& features, std::vector<float> filledShare)
+{
+    std::vector<VertexProperty> props = featureProperties(std::move(features));
     if (!filledShare.empty()) props.push_back({"filled_share", std::move(filledShare)});
     return props;
 }

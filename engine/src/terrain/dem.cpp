@@ -58,7 +58,10 @@ GdalDataset openRaster(const std::string& path)
     initGdal();
     if (!std::filesystem::exists(path)) throw IOError("cannot open '" + path + "': no such file");
     CPLErrorReset();
-    GdalDataset ds(GDALDataset::FromHandle(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
+    // NUM_THREADS: GeoTIFF tiles are decompressed on every core (GDAL ≥ 3.6; other drivers
+    // ignore it).
+    const char* const options[] = {"NUM_THREADS=ALL_CPUS", nullptr};
+    GdalDataset ds(GDALDataset::FromHandle(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, options, nullptr)));
     if (!ds) throw IOError("cannot read '" + path + "' as a raster: " + lastGdalError("not a format GDAL reads"));
     return ds;
 }

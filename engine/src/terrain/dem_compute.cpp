@@ -10,6 +10,8 @@
 #include <msii/mesh/prepare_mesh.h>
 #include <msii/tiling/tiled_compute.h>
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -518,25 +520,32 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
         return false;
     };
     std::vector<float> filledShare(nOwn, nan);
-    std::vector<std::uint32_t> inFace;
-    std::size_t squares = 0;
     const bool wantsShare = std::find(result.bands.begin(), result.bands.end(), "filled_share") != result.bands.end();
     const DiscSquares disc =
         wantsShare ? discSquares(w.kernel.radii.back(), w.kernel.cellWidth, w.kernel.cellHeight) : DiscSquares();
     const double discArea = 3.14159265358979323846 * w.kernel.radii.back() * w.kernel.radii.back();
-    for (int y = 0; y < win.rows; ++y)
+    // Row by row in parallel: the squares with four heights, and the cells in a face.
+    std::vector<std::size_t> squaresOfRow(std::size_t(win.rows), 0);
+    std::vector<char> onSurface(nOwn, 0);
+    tbb::parallel_for(0, win.rows, [&](int y) {
         for (int x = 0; x < win.cols; ++x) {
             const int c = own.col + x, r = own.row + y;
             if (kindAt(c, r) != GridCell::Height) continue;
-            squares += given(c, r);
+            squaresOfRow[std::size_t(y)] += given(c, r);
             if (!given(c, r) && !given(c - 1, r) && !given(c, r - 1) && !given(c - 1, r - 1)) continue;
             const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x);
-            inFace.push_back(std::uint32_t(k));
+            onSurface[k] = 1;
             double share = 0;
             for (std::size_t i = 0; i < disc.area.size(); ++i)
                 if (added(c + disc.column[i], r + disc.row[i])) share += disc.area[i];
             filledShare[k] = float(std::min(1.0, share / discArea));
         }
+    });
+    std::vector<std::uint32_t> inFace;
+    for (std::size_t k = 0; k < nOwn; ++k)
+        if (onSurface[k]) inFace.push_back(std::uint32_t(k));
+    std::size_t squares = 0;
+    for (const std::size_t n : squaresOfRow) squares += n;
     result.triangles += 2 * squares;
     // The bands, from the columns computed (those of the radii the bands need; the others
     // are empty and give no property, io/feature_properties.h).
@@ -545,21 +554,20 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
     // (moved, not copied: a window's columns are tens of MB each)
     if (!hf.volume.empty()) features[Invariant::Volume] = std::move(hf.volume);
     if (!hf.sphere.empty()) features[Invariant::Sphere] = std::move(hf.sphere);
-    std::vector<VertexProperty> props = outputProperties(features, filledShare);
-    for (VertexProperty& p : props)
-        for (std::size_t k = 0; k < nOwn; ++k)
-            if (std::isnan(filledShare[k])) p.values[k] = nan;  // not on the surface
     result.masked.add(features, filledShare, inFace);
+    std::vector<VertexProperty> props = outputProperties(std::move(features), filledShare);
     for (std::size_t b = 0; b < result.bands.size(); ++b) {
         const std::string& name = result.bands[b];
         const bool height = name == "height";  // found once per band, not per cell
         const auto p = std::find_if(props.begin(), props.end(), [&](const VertexProperty& q) { return q.name == name; });
-        for (int y = 0; y < win.rows; ++y)
+        tbb::parallel_for(0, win.rows, [&](int y) {
             for (int x = 0; x < win.cols; ++x) {
                 const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x),
                                   at = win.boxCell(win.col + x, win.row + y);
-                cells[b][at] = height ? win.dem.heights[at] : p->values[k];
+                // Not on the surface: nodata in every band but the height.
+                cells[b][at] = height ? win.dem.heights[at] : std::isnan(filledShare[k]) ? nan : p->values[k];
             }
+        });
     }
     if (g.gapsFilled > 0) {
         std::ostringstream msg;

@@ -13,6 +13,8 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -323,6 +325,24 @@ MSII_LANES Lanes maxLanes(Lanes a, Lanes b) { return a > b ? a : b; }
 MSII_LANES Lanes minLanes(Lanes a, Lanes b) { return a < b ? a : b; }
 MSII_LANES Lanes absLanes(Lanes a) { return Lanes(LaneMask(a) & 0x7fffffff); }
 
+/// discSamples at radius @p r, kept for the next call with the same disc: a DEM's windows
+/// all ask for the same few (their quadratures take longer than a window's bands do).
+std::shared_ptr<const DiscSamples> sharedDisc(double r, double cw, double ch)
+{
+    static std::mutex mutex;
+    static std::map<std::array<double, 3>, std::shared_ptr<const DiscSamples>> kept;
+    const std::array<double, 3> key{r, cw, ch};
+    {
+        const std::lock_guard<std::mutex> lock(mutex);
+        if (const auto found = kept.find(key); found != kept.end()) return found->second;
+    }
+    auto disc = std::make_shared<const DiscSamples>(discSamples(r, cw, ch, discSplit(r, cw, ch)));
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (kept.size() >= 64) kept.clear();  // a bound; the discs in use stay with their users
+    kept.emplace(key, disc);
+    return disc;
+}
+
 /// Eight 64-bit integers and eight doubles, one per lane.
 typedef long long LaneInts __attribute__((vector_size(64)));
 typedef long long LaneQuads __attribute__((vector_size(32)));
@@ -359,13 +379,15 @@ struct DiscPlans {
     std::vector<DiscPlan> discs;  ///< ascending radius
 };
 
-DiscPlans planDiscs(const std::vector<DiscSamples>& samples, double cw, double ch, std::ptrdiff_t stride)
+DiscPlans planDiscs(const std::vector<std::shared_ptr<const DiscSamples>>& discs, double cw, double ch,
+                    std::ptrdiff_t stride)
 {
+    const auto samples = [&](std::size_t k) -> const DiscSamples& { return *discs[k]; };
     DiscPlans plans;
-    std::vector<std::size_t> order(samples.size());
+    std::vector<std::size_t> order(discs.size());
     for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
     std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t a, std::size_t b) { return samples[a].radius < samples[b].radius; });
+                     [&](std::size_t a, std::size_t b) { return samples(a).radius < samples(b).radius; });
     // W_o of a tap whose four squares are inside: hatIntegrals adds cell/6, cell/3, cell/3 and
     // cell/6 in that order for every such tap, at every radius.
     const double cell = cw * ch;
@@ -375,7 +397,7 @@ DiscPlans planDiscs(const std::vector<DiscSamples>& samples, double cw, double c
     int reach = 0;
     const auto fail = [] { throw std::logic_error("height field: a disc's taps are not runs of cells nested by radius"); };
     for (const std::size_t k : order) {
-        const DiscSamples& d = samples[k];
+        const DiscSamples& d = samples(k);
         DiscPlan plan;
         plan.index = k;
         plan.samples = &d;
@@ -618,10 +640,9 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
         if (sums.belowOf[j] >= 0) result.sphere[j].assign(cells, nan);
     }
     if (sums.radius.empty() || cells == 0) return result;
-    std::vector<DiscSamples> discs(sums.radius.size());
+    std::vector<std::shared_ptr<const DiscSamples>> discs(sums.radius.size());
     tbb::parallel_for(std::size_t(0), discs.size(), [&](std::size_t k) {
-        const double r = sums.radius[k];
-        discs[k] = discSamples(r, options.cellWidth, options.cellHeight, discSplit(r, options.cellWidth, options.cellHeight));
+        discs[k] = sharedDisc(sums.radius[k], options.cellWidth, options.cellHeight);
     });
     const HeightCoverage coverage(grid);
     // The heights with kLanes columns more on the right, so that a block of lanes past the

@@ -1,9 +1,5 @@
 #include <msii/terrain/raster_output.h>
 
-#include <algorithm>
-#include <cstdint>
-#include <limits>
-
 #include "gdal_support.h"
 
 #include <msii/core/errors.h>
@@ -12,6 +8,8 @@
 #include <cpl_string.h>
 #include <gdal_utils.h>
 #include <ogr_spatialref.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -119,10 +117,12 @@ void RasterPieceWriter::write(int band, int col0, int row0, int cols, int rows, 
     if (!m.dataset) throw IOError("the raster '" + m.path + "' is closed");
     if (m.options.scaled16) {
         std::vector<std::uint16_t> raw(std::size_t(cols) * std::size_t(rows));
-        for (std::size_t k = 0; k < raw.size(); ++k)
-            raw[k] = std::isnan(values[k]) ? std::uint16_t(kScaled16Nodata)
-                                           : std::uint16_t(std::clamp(std::lround(double(values[k]) / kScaled16Step), 0L,
-                                                                      long(kScaled16Nodata) - 1));
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, raw.size(), 1 << 16), [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t k = range.begin(); k < range.end(); ++k)
+                raw[k] = std::isnan(values[k]) ? std::uint16_t(kScaled16Nodata)
+                                               : std::uint16_t(std::clamp(std::lround(double(values[k]) / kScaled16Step), 0L,
+                                                                          long(kScaled16Nodata) - 1));
+        });
         if (m.dataset->GetRasterBand(band + 1)->RasterIO(GF_Write, col0, row0, cols, rows, raw.data(), cols, rows,
                                                          GDT_UInt16, 0, 0, nullptr) != CE_None)
             throw IOError("cannot write '" + m.path + "': " + detail::lastGdalError("write error"));

@@ -23,10 +23,14 @@ namespace msii {
 
 /// Copies the features into properties, in the order of the file comment.
 std::vector<VertexProperty> featureProperties(const FeatureSet& features);
+/// The same, moving the columns out of @p features (a DEM window's are tens of MB each).
+std::vector<VertexProperty> featureProperties(FeatureSet&& features);
 
 /// The properties msii compute writes: featureProperties, then `filled_share` (the share of
 /// hole fill in the largest ball, PrepareMeshResult::filledShare) if @p filledShare is given.
 std::vector<VertexProperty> outputProperties(const FeatureSet& features, std::vector<float> filledShare);
+/// The same, moving the columns out of @p features.
+std::vector<VertexProperty> outputProperties(FeatureSet&& features, std::vector<float> filledShare);
 
 /// The names of outputProperties for @p invariants at @p scales radii, in its order.
 std::vector<std::string> outputPropertyNames(const std::vector<Invariant>& invariants, int scales);
