@@ -559,9 +559,11 @@ public:
                 at(c + 1, r + 1) = at(c, r + 1) + at(c + 1, r) - at(c, r) + (std::isnan(g.at(c, r)) ? 1 : 0);
     }
     /// Whether every cell within @p reach columns and rows of (col, row) exists and has a height.
-    bool complete(int col, int row, int reach, int rows) const
+    bool complete(int col, int row, int reach, int rows) const { return complete(col, col, row, reach, rows); }
+    /// The same for every cell (col, row) to (last, row).
+    bool complete(int col, int last, int row, int reach, int rows) const
     {
-        const int c0 = col - reach, c1 = col + reach + 1, r0 = row - reach, r1 = row + reach + 1;
+        const int c0 = col - reach, c1 = last + reach + 1, r0 = row - reach, r1 = row + reach + 1;
         if (c0 < 0 || r0 < 0 || c1 > mCols || r1 > rows) return false;
         return at(c1, r1) - at(c0, r1) - at(c1, r0) + at(c0, r0) == 0;
     }
@@ -687,19 +689,24 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
             for (int c = 0; c < own.cols; c += kLanes) {
                 const int lanes = std::min(kLanes, own.cols - c);
                 bool all = true, any = false;
-                for (int k = 0; k < kLanes; ++k) {
-                    // Most cells have every height of the largest disc: that is tried first.
-                    const auto has = [&](std::size_t m) {
-                        return coverage.complete(own.col + c + k, row, plans.discs[m].reach, grid.rows);
-                    };
-                    std::size_t m = 0;
-                    if (k < lanes && has(discCount - 1))
-                        m = discCount;
-                    else
-                        while (k < lanes && m + 1 < discCount && has(m)) ++m;
-                    complete[k] = m;
-                    all = all && (m == discCount || k >= lanes);
-                    any = any || m > 0;
+                // Most blocks have every height of their largest discs: that is tried first.
+                if (lanes == kLanes && coverage.complete(own.col + c, own.col + c + kLanes - 1, row, reach, grid.rows)) {
+                    std::fill(complete, complete + kLanes, discCount);
+                    any = true;
+                } else {
+                    for (int k = 0; k < kLanes; ++k) {
+                        const auto has = [&](std::size_t m) {
+                            return coverage.complete(own.col + c + k, row, plans.discs[m].reach, grid.rows);
+                        };
+                        std::size_t m = 0;
+                        if (k < lanes && has(discCount - 1))
+                            m = discCount;
+                        else
+                            while (k < lanes && m + 1 < discCount && has(m)) ++m;
+                        complete[k] = m;
+                        all = all && (m == discCount || k >= lanes);
+                        any = any || m > 0;
+                    }
                 }
                 if (!any) continue;
                 float z0[kLanes];
