@@ -2,6 +2,9 @@
 
 #include <msii/core/errors.h>
 
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -141,23 +144,24 @@ void fillGaps(Grid& g, double cw, double ch, double maxPerimeter, GridContinuati
     }
 }
 
-/// z = c0 + c1 x + c2 y fitted by least squares to the heights within @p fit of cell
-/// (@p bc, @p br) (x, y from it in ground units); the constant where they span no plane.
-std::array<double, 3> fitPlane(const Grid& g, int bc, int br, double cw, double ch, double fit)
+/// z = c0 + c1 x + c2 y fitted by least squares to the heights @p z (NaN: none) within @p fit
+/// of cell (@p bc, @p br) of @p g (x, y from it in ground units); the constant where they span
+/// no plane.
+std::array<double, 3> fitPlane(const std::vector<float>& z, const Grid& g, int bc, int br, double cw, double ch, double fit)
 {
     const int rx = std::max(1, int(std::floor(fit / cw))), ry = std::max(1, int(std::floor(fit / ch)));
     const double fit2 = std::max(fit * fit, cw * cw + ch * ch);
     double m[3][3] = {}, v[3] = {};
-    const double z0 = g.z[g.at(bc, br)];
+    const double z0 = z[g.at(bc, br)];
     for (int dy = -ry; dy <= ry; ++dy)
         for (int dx = -rx; dx <= rx; ++dx) {
             const double x = dx * cw, y = dy * ch;
             if (x * x + y * y > fit2 || !g.inside(bc + dx, br + dy)) continue;
             const std::size_t c = g.at(bc + dx, br + dy);
-            if (g.kind[c] == GridCell::Continued || std::isnan(g.z[c])) continue;
-            const double p[3] = {1, x, y}, z = g.z[c] - z0;
+            if (std::isnan(z[c])) continue;  // (a continued cell is NaN in z)
+            const double p[3] = {1, x, y}, dz = z[c] - z0;
             for (int i = 0; i < 3; ++i) {
-                v[i] += p[i] * z;
+                v[i] += p[i] * dz;
                 for (int j = 0; j < 3; ++j) m[i][j] += p[i] * p[j];
             }
         }
@@ -183,7 +187,7 @@ std::array<double, 3> fitPlane(const Grid& g, int bc, int br, double cw, double 
 void continueBorders(Grid& g, const GridContinuationOptions& o, GridContinuationResult& result)
 {
     const int m = o.margin;
-    if (m <= 0) return;
+    if (m <= 0 || std::none_of(g.z.begin(), g.z.end(), [](float v) { return std::isnan(v); })) return;
     // The offsets to search for the nearest height, nearest first (ties in row-major order).
     std::vector<std::array<int, 2>> offsets;
     for (int dy = -m; dy <= m; ++dy)
@@ -211,8 +215,12 @@ void continueBorders(Grid& g, const GridContinuationOptions& o, GridContinuation
                 if (g.inside(x + dx, y + dy)) d = std::min(d, near[g.at(x + dx, y + dy)] + 1);
         }
     const std::vector<float> z = g.z;  // heights and filled gaps: what the continuation reads
-    std::unordered_map<std::size_t, std::array<double, 3>> planes;
-    for (int y = 0; y < g.rows; ++y)
+    // Row by row in parallel: a cell's value depends on z only (each thread keeps the planes
+    // it has fitted; a plane is the same whoever fits it).
+    tbb::enumerable_thread_specific<std::unordered_map<std::size_t, std::array<double, 3>>> planesOfThread;
+    std::vector<std::size_t> continuedInRow(std::size_t(g.rows), 0);
+    tbb::parallel_for(0, g.rows, [&](int y) {
+        auto& planes = planesOfThread.local();
         for (int x = 0; x < g.cols; ++x) {
             const std::size_t c = g.at(x, y);
             if (!std::isnan(z[c]) || near[c] > m) continue;
@@ -226,7 +234,8 @@ void continueBorders(Grid& g, const GridContinuationOptions& o, GridContinuation
                 if (!g.inside(bx, by) || std::isnan(z[g.at(bx, by)])) continue;
                 const std::size_t b = g.at(bx, by);
                 auto plane = planes.find(b);
-                if (plane == planes.end()) plane = planes.emplace(b, fitPlane(g, bx, by, o.cellWidth, o.cellHeight, o.fitRadius)).first;
+                if (plane == planes.end())
+                    plane = planes.emplace(b, fitPlane(z, g, bx, by, o.cellWidth, o.cellHeight, o.fitRadius)).first;
                 const std::array<double, 3>& p = plane->second;
                 const double ex = -off[0] * o.cellWidth, ey = -off[1] * o.cellHeight;  // the cell from b
                 double h = p[0] + p[1] * ex + p[2] * ey;
@@ -235,10 +244,12 @@ void continueBorders(Grid& g, const GridContinuationOptions& o, GridContinuation
                     h += 0.5 * (double(z[g.at(mx, my)]) - (p[0] - p[1] * ex - p[2] * ey));
                 g.z[c] = float(h);
                 g.kind[c] = GridCell::Continued;
-                ++result.cellsContinued;
+                ++continuedInRow[std::size_t(y)];
                 break;
             }
         }
+    });
+    for (const std::size_t n : continuedInRow) result.cellsContinued += n;
 }
 
 } // namespace
