@@ -369,9 +369,20 @@ struct DiscPlan {
     std::vector<std::ptrdiff_t> coreFrom, coreTo;  ///< per row: prefix sums before the run and past it
     double coreCount = 0;                          ///< core taps
     std::vector<std::ptrdiff_t> runAt, cellAt;     ///< new taps: runs of eight cells, single cells
-    std::vector<std::ptrdiff_t> rim;               ///< the taps that are not core
-    std::vector<float> rimWeight;                  ///< their W_o
-    std::array<std::vector<std::ptrdiff_t>, 3> piece;
+    /// A tap that is not core: its offset and W_o.
+    struct Tap {
+        std::int32_t at;
+        float weight;
+    };
+    std::vector<Tap> rim;
+    /// The pieces for C in DiscSamples' order (h̄ ascending), what the sum of one reads
+    /// together in 32 bytes.
+    struct Piece {
+        float halfChord, area;
+        float weight[3];
+        std::int32_t at[3];  ///< offsets of its heights' cells
+    };
+    std::vector<Piece> pieces;
 };
 
 struct DiscPlans {
@@ -425,8 +436,9 @@ DiscPlans planDiscs(const std::vector<std::shared_ptr<const DiscSamples>>& discs
                     else
                         fail();
                 } else {
-                    plan.rim.push_back(rw * stride + c);
-                    plan.rimWeight.push_back(w);
+                    if (std::abs(rw) > std::numeric_limits<std::int32_t>::max() / stride - 1)
+                        throw InvalidInputError("the height grid is too wide for a ball of this radius");
+                    plan.rim.push_back({std::int32_t(rw * stride + c), w});
                 }
             }
             if (coreFirst <= coreLast) {
@@ -457,8 +469,17 @@ DiscPlans planDiscs(const std::vector<std::shared_ptr<const DiscSamples>>& discs
         for (const auto& [rw, run] : before)
             if (!taps.count(rw)) fail();
         before = std::move(taps);
-        for (std::size_t t = 0; t < 3; ++t)
-            for (std::size_t i = 0; i < d.size(); ++i) plan.piece[t].push_back(d.tapRow[t][i] * stride + d.tapColumn[t][i]);
+        for (std::size_t i = 0; i < d.size(); ++i) {
+            DiscPlan::Piece piece{d.meanHalfChord[i], d.area[i], {}, {}};
+            for (std::size_t t = 0; t < 3; ++t) {
+                const std::ptrdiff_t at = d.tapRow[t][i] * stride + d.tapColumn[t][i];
+                if (at != std::ptrdiff_t(std::int32_t(at)))
+                    throw InvalidInputError("the height grid is too wide for a ball of this radius");
+                piece.weight[t] = d.tapWeight[t][i];
+                piece.at[t] = std::int32_t(at);
+            }
+            plan.pieces.push_back(piece);
+        }
         plans.discs.push_back(std::move(plan));
     }
     return plans;
@@ -515,28 +536,27 @@ __attribute__((target_clones("avx2", "default"))) void sumDiscs(const DiscGrid& 
             coreRight += toRight - fromRight;
         }
         const std::size_t rims = disc.rim.size();
+        const DiscPlan::Tap* rim = disc.rim.data();
         Lanes rimEven = zero, rimOdd = zero;
         std::size_t i = 0;
         for (; i + 2 <= rims; i += 2) {
-            rimEven += MSII_BROADCAST(disc.rimWeight[i]) * (loadLanes(z + disc.rim[i]) - z0);
-            rimOdd += MSII_BROADCAST(disc.rimWeight[i + 1]) * (loadLanes(z + disc.rim[i + 1]) - z0);
+            rimEven += MSII_BROADCAST(rim[i].weight) * (loadLanes(z + rim[i].at) - z0);
+            rimOdd += MSII_BROADCAST(rim[i + 1].weight) * (loadLanes(z + rim[i + 1].at) - z0);
         }
-        if (i < rims) rimEven += MSII_BROADCAST(disc.rimWeight[i]) * (loadLanes(z + disc.rim[i]) - z0);
+        if (i < rims) rimEven += MSII_BROADCAST(rim[i].weight) * (loadLanes(z + rim[i].at) - z0);
         float most = 0;
         for (int l = 0; l < kLanes; ++l) most = std::max(most, reach[l]);
-        const DiscSamples& d = *disc.samples;
-        const std::size_t n = d.size();
-        const float* h = d.meanHalfChord.data();
-        const float* area = d.area.data();
-        const float *w0 = d.tapWeight[0].data(), *w1 = d.tapWeight[1].data(), *w2 = d.tapWeight[2].data();
-        const std::ptrdiff_t *p0 = disc.piece[0].data(), *p1 = disc.piece[1].data(), *p2 = disc.piece[2].data();
+        const std::size_t n = disc.pieces.size();
+        const DiscPlan::Piece* pieces = disc.pieces.data();
         Lanes clamps = zero;
-        for (i = 0; i < n && h[i] <= most; ++i) {
-            const Lanes hi = MSII_BROADCAST(h[i]);
-            const Lanes below = MSII_BROADCAST(w0[i]) * loadLanes(z + p0[i]) + MSII_BROADCAST(w1[i]) * loadLanes(z + p1[i]) +
-                                MSII_BROADCAST(w2[i]) * loadLanes(z + p2[i]) - z0 + hi;
+        for (i = 0; i < n && pieces[i].halfChord <= most; ++i) {
+            const DiscPlan::Piece& p = pieces[i];
+            const Lanes hi = MSII_BROADCAST(p.halfChord);
+            const Lanes below = MSII_BROADCAST(p.weight[0]) * loadLanes(z + p.at[0]) +
+                                MSII_BROADCAST(p.weight[1]) * loadLanes(z + p.at[1]) +
+                                MSII_BROADCAST(p.weight[2]) * loadLanes(z + p.at[2]) - z0 + hi;
             const Lanes clamped = minLanes(maxLanes(below, zero), hi + hi) - below;
-            clamps += Lanes(LaneMask(MSII_BROADCAST(area[i]) * clamped) & LaneMask(hi <= reach));
+            clamps += Lanes(LaneMask(MSII_BROADCAST(p.area) * clamped) & LaneMask(hi <= reach));
         }
         LaneInts core;
         std::memcpy(&core, &coreLeft, sizeof coreLeft);
