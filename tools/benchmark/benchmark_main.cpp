@@ -105,9 +105,15 @@ What limits the speed now, and the next steps:
   area over the finest voxel squared, not the vertices: a slab whose walls and bottom are a
   few long triangles pays for their area as for the top's. Next: a coarser level set where
   no vertex is near.
-- **DEMs** on the height field: the clamps of the chords near the disc's rim, about two
-  thirds of the kernel at R = 10 cells on rolling terrain. Next: the rim's pieces as
-  annular sectors with h(ρ) integrated in closed form, so that they can be longer.
+- **DEMs** on the height field: the kernel is most of the time (on the 100M-cell DEM about
+  three quarters; reading, filling, continuing and writing the rest). In the kernel, at
+  R = 30 cells on rolling terrain (`perf`): the clamps of the chords near the disc's rim
+  half, the taps that the rim cuts (weighed one by one) a fifth, the largest |z − z₀| over
+  the disc (from runs of eight cells) a fifth, the whole cells inside (prefix sums of the
+  rows) under a tenth. Of the pieces whose clamps are summed, about a third clamp: the
+  bound, one |z − z₀| for the whole disc, is loose on one side of a slope. Next: a bound
+  per sector of the disc, or the rim's pieces as annular sectors with h(ρ) integrated in
+  closed form, so that they can be longer.
 
 This machine's timings vary from one sitting to the next, by 15–20 % within a day and by up
 to 2× between days, also in stages whose code did not change: compare builds in alternating
