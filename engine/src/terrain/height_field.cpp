@@ -446,15 +446,17 @@ DiscPlans planDiscs(const std::vector<std::shared_ptr<const DiscSamples>>& discs
                 plan.coreTo.push_back(rw * prefixStride + coreLast + 1);
                 plan.coreCount += coreLast - coreFirst + 1;
             }
-            // The taps that the disc before does not have: up to two runs in this row.
+            // The taps that the disc before does not have: up to two runs in this row, read
+            // as runs of eight cells within the row's taps (a run may reach into the taps of
+            // the disc before, whose heights the largest |z_o − z₀| holds already).
             const auto addRun = [&](int a, int b) {
-                if (b - a + 1 < 8) {
+                if (last - first + 1 < 8) {
                     for (int c = a; c <= b; ++c) plan.cellAt.push_back(rw * stride + c);
                     return;
                 }
-                int c = a;
+                int c = std::min(a, last - 7);
                 for (; c + 8 <= b + 1; c += 8) plan.runAt.push_back(rw * stride + c);
-                if (c <= b) plan.runAt.push_back(rw * stride + b - 7);
+                if (c <= b) plan.runAt.push_back(rw * stride + std::max(first, b - 7));
             };
             const auto previous = before.find(rw);
             if (previous == before.end()) {
