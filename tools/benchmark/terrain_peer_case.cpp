@@ -21,7 +21,8 @@ sys.path.insert(0, sys.argv[1])
 import numpy as np
 from osgeo import gdal
 import rvt.vis
-dem = gdal.Open(sys.argv[2]).GetRasterBand(1).ReadAsArray().astype(np.float32)
+ds = gdal.Open(sys.argv[2])  # kept while its band is read: a band of a freed dataset crashes
+dem = ds.GetRasterBand(1).ReadAsArray().astype(np.float32)
 R = int(sys.argv[3]); a, b = max(1, R // 3), max(2, 2 * R // 3)
 t = time.perf_counter()
 rvt.vis.sky_view_factor(dem=dem, resolution=1, compute_svf=True, compute_opns=True, svf_n_dir=16, svf_r_max=R, svf_noise=0)
