@@ -48,7 +48,7 @@ std::vector<VertexProperty> propertiesOf(const FeatureSet& features, FeatureSet*
         tail.push_back(std::move(value));
         tail.push_back(std::move(count));
     }
-    for (Invariant inv : features.invariants()) {
+    for (Invariant inv : invariants) {
         const FeatureColumns& columns = features[inv];
         for (std::size_t j = 0; j < columns.size(); ++j)
             if (!columns[j].empty())

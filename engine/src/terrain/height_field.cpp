@@ -323,7 +323,6 @@ MSII_LANES Lanes loadLanes(const float* p)
 #define MSII_BROADCAST(x) (float(x) - Lanes{})
 MSII_LANES Lanes maxLanes(Lanes a, Lanes b) { return a > b ? a : b; }
 MSII_LANES Lanes minLanes(Lanes a, Lanes b) { return a < b ? a : b; }
-MSII_LANES Lanes absLanes(Lanes a) { return Lanes(LaneMask(a) & 0x7fffffff); }
 
 /// discSamples at radius @p r, kept for the next call with the same disc: a DEM's windows
 /// all ask for the same few (their quadratures take longer than a window's bands do).
@@ -364,7 +363,6 @@ constexpr double kHeightScale = 8388608.0;
 /// sums of row stride s + 1.
 struct DiscPlan {
     std::size_t index = 0;  ///< in the discs as summed (SumRadii)
-    const DiscSamples* samples = nullptr;
     int reach = 0;  ///< the largest reach of this disc and the smaller ones
     std::vector<std::ptrdiff_t> coreFrom, coreTo;  ///< per row: prefix sums before the run and past it
     double coreCount = 0;                          ///< core taps
@@ -407,11 +405,18 @@ DiscPlans planDiscs(const std::vector<std::shared_ptr<const DiscSamples>>& discs
     std::map<int, std::pair<int, int>> before;  // the taps of the disc before: row → first and last column
     int reach = 0;
     const auto fail = [] { throw std::logic_error("height field: a disc's taps are not runs of cells nested by radius"); };
+    // The offset of cell (row, column) from the centre, in 32 bits (the rim's taps and the
+    // pieces are read from few bytes).
+    const auto offset32 = [&](int rw, int c) {
+        const std::ptrdiff_t at = rw * stride + c;
+        if (at != std::ptrdiff_t(std::int32_t(at)))
+            throw InvalidInputError("the height grid is too wide for a ball of this radius");
+        return std::int32_t(at);
+    };
     for (const std::size_t k : order) {
         const DiscSamples& d = samples(k);
         DiscPlan plan;
         plan.index = k;
-        plan.samples = &d;
         reach = std::max(reach, d.reach);
         plan.reach = reach;
         std::map<int, std::vector<std::pair<int, float>>> rows;  // row → (column, W_o), column ascending
@@ -436,9 +441,7 @@ DiscPlans planDiscs(const std::vector<std::shared_ptr<const DiscSamples>>& discs
                     else
                         fail();
                 } else {
-                    if (std::abs(rw) > std::numeric_limits<std::int32_t>::max() / stride - 1)
-                        throw InvalidInputError("the height grid is too wide for a ball of this radius");
-                    plan.rim.push_back({std::int32_t(rw * stride + c), w});
+                    plan.rim.push_back({offset32(rw, c), w});
                 }
             }
             if (coreFirst <= coreLast) {
@@ -474,11 +477,8 @@ DiscPlans planDiscs(const std::vector<std::shared_ptr<const DiscSamples>>& discs
         for (std::size_t i = 0; i < d.size(); ++i) {
             DiscPlan::Piece piece{d.meanHalfChord[i], d.area[i], {}, {}};
             for (std::size_t t = 0; t < 3; ++t) {
-                const std::ptrdiff_t at = d.tapRow[t][i] * stride + d.tapColumn[t][i];
-                if (at != std::ptrdiff_t(std::int32_t(at)))
-                    throw InvalidInputError("the height grid is too wide for a ball of this radius");
                 piece.weight[t] = d.tapWeight[t][i];
-                piece.at[t] = std::int32_t(at);
+                piece.at[t] = offset32(d.tapRow[t][i], d.tapColumn[t][i]);
             }
             plan.pieces.push_back(piece);
         }
