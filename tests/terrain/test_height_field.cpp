@@ -1,5 +1,6 @@
 // V and S straight from the heights (terrain/height_field.h): a plane and a slope give ½
-// exactly; on rough terrain with mounds, ditches and walls, at random interior cells and
+// exactly; on rough terrain with mounds, ditches and walls, and on steeper terrain with a
+// quarry face, a sunken lane and a bank, at random interior cells and
 // every radius, the values are within V̂ 1e-4 (mean) and 5e-4 (largest) and Ŝ 2e-4 and 1e-3
 // of the exact mode on the DEM's own mesh (terrain/dem.h: a vertex per cell centre, two
 // triangles per square); every lane of a row block agrees with the cell computed alone; the
@@ -39,6 +40,17 @@ double terrain(double x, double y, std::uint64_t seed)
     }
     const double wall = 0.6 * x + 0.8 * y - 70 * (0.8 + 0.4 * u(rng));  // a terrace's wall
     z += 1.5 / (1 + std::exp(-wall / 0.4));
+    return z;
+}
+
+/// Steeper than terrain(), as lidar DEMs have it: a quarry face of 6 m over about a cell, a
+/// sunken lane 2 m deep with sides of a cell, a round bank of 3 m.
+double steepTerrain(double x, double y, std::uint64_t seed)
+{
+    double z = terrain(x, y, seed);
+    z += 6.0 / (1 + std::exp(-(0.8 * x - 0.6 * y - 20) / 0.15));
+    z -= 2.0 / (1 + std::exp((std::abs(0.3 * x + 0.95 * y - 60) - 2.5) / 0.15));
+    z += 3.0 / (1 + std::exp((std::hypot(x - 80, y - 40) - 15) / 0.2));
     return z;
 }
 
@@ -145,12 +157,13 @@ TEST(HeightField, PlaneAndSlopeAreOneHalf)
 
 TEST(HeightField, RoughTerrainAgainstTheExactMode)
 {
+    for (const bool steep : {false, true})
     for (const double roughness : {0.05, 0.15}) {
-        const Dem dem = makeDem(120, 1.0, roughness, 3, terrain);
+        const Dem dem = steep ? makeDem(120, 1.0, roughness, 7, steepTerrain) : makeDem(120, 1.0, roughness, 3, terrain);
         for (const double R : {10.0, 30.0}) {
             const Comparison c = againstExact(dem, 1.0, radiiUpTo(R, int(R) > 16 ? 16 : int(R)), R > 20 ? 25 : 60);
-            std::printf("roughness %.2f m, R %.0f cells: V mean %.1e max %.1e; S mean %.1e max %.1e (%zu values)\n",
-                        roughness, R, c.meanV, c.maxV, c.meanS, c.maxS, c.count);
+            std::printf("%sroughness %.2f m, R %.0f cells: V mean %.1e max %.1e; S mean %.1e max %.1e (%zu values)\n",
+                        steep ? "steep, " : "", roughness, R, c.meanV, c.maxV, c.meanS, c.maxS, c.count);
             EXPECT_GT(c.count, 200u);
             EXPECT_LE(c.meanV, 1e-4);
             EXPECT_LE(c.maxV, 5e-4);
@@ -159,3 +172,4 @@ TEST(HeightField, RoughTerrainAgainstTheExactMode)
         }
     }
 }
+

@@ -23,7 +23,9 @@ namespace msii {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kSphereStep = kHeightFieldSphereStep;
+/// The pieces of S's discs are this many times finer per axis than V's: S divides the
+/// difference of two sums by 2δ (heightFieldSphereStep), which carries their error with it.
+constexpr int kSpherePieceFactor = 2;
 /// Pieces of cells across a disc's radius, at least: fewer, and the pieces' heights (their
 /// centres') miss the terrain's bends within them (docs/method.md, Height fields).
 constexpr double kDiscPieces = 40;
@@ -326,16 +328,16 @@ MSII_LANES Lanes minLanes(Lanes a, Lanes b) { return a < b ? a : b; }
 
 /// discSamples at radius @p r, kept for the next call with the same disc: a DEM's windows
 /// all ask for the same few (their quadratures take longer than a window's bands do).
-std::shared_ptr<const DiscSamples> sharedDisc(double r, double cw, double ch)
+std::shared_ptr<const DiscSamples> sharedDisc(double r, double cw, double ch, int split)
 {
     static std::mutex mutex;
-    static std::map<std::array<double, 3>, std::shared_ptr<const DiscSamples>> kept;
-    const std::array<double, 3> key{r, cw, ch};
+    static std::map<std::array<double, 4>, std::shared_ptr<const DiscSamples>> kept;
+    const std::array<double, 4> key{r, cw, ch, double(split)};
     {
         const std::lock_guard<std::mutex> lock(mutex);
         if (const auto found = kept.find(key); found != kept.end()) return found->second;
     }
-    auto disc = std::make_shared<const DiscSamples>(discSamples(r, cw, ch, discSplit(r, cw, ch)));
+    auto disc = std::make_shared<const DiscSamples>(discSamples(r, cw, ch, split));
     const std::lock_guard<std::mutex> lock(mutex);
     if (kept.size() >= 64) kept.clear();  // a bound; the discs in use stay with their users
     kept.emplace(key, disc);
@@ -597,9 +599,11 @@ private:
     std::vector<std::int64_t> mMissing;
 };
 
-/// The radii at which V is summed: V's wanted radii, and r(1 ± kSphereStep) for Ŝ's.
+/// The radii at which V is summed: V's wanted radii, and r(1 ± δ) for Ŝ's (with pieces
+/// kSpherePieceFactor times finer).
 struct SumRadii {
     std::vector<double> radius;
+    std::vector<int> split;  ///< the pieces per cell axis (discSamples)
     std::vector<int> volumeOf, belowOf, aboveOf;  ///< per radius j: its index, or −1
 };
 
@@ -608,17 +612,20 @@ SumRadii sumRadii(const HeightFieldOptions& o)
     SumRadii s;
     const std::size_t n = o.radii.size();
     s.volumeOf.assign(n, -1), s.belowOf.assign(n, -1), s.aboveOf.assign(n, -1);
-    const auto add = [&](double r) {
+    const double cell = std::max(o.cellWidth, o.cellHeight);
+    const auto add = [&](double r, int factor) {
         s.radius.push_back(r);
+        s.split.push_back(factor * discSplit(r, o.cellWidth, o.cellHeight));
         return int(s.radius.size()) - 1;
     };
     for (std::size_t j = 0; j < n; ++j) {
         const bool wanted = o.wanted.empty() || std::find(o.wanted.begin(), o.wanted.end(), int(j)) != o.wanted.end();
         if (!wanted) continue;
-        if (o.computeVolume) s.volumeOf[j] = add(o.radii[j]);
+        if (o.computeVolume) s.volumeOf[j] = add(o.radii[j], 1);
         if (o.computeSphere) {
-            s.belowOf[j] = add(o.radii[j] * (1 - kSphereStep));
-            s.aboveOf[j] = add(o.radii[j] * (1 + kSphereStep));
+            const double step = heightFieldSphereStep(o.radii[j], cell);
+            s.belowOf[j] = add(o.radii[j] * (1 - step), kSpherePieceFactor);
+            s.aboveOf[j] = add(o.radii[j] * (1 + step), kSpherePieceFactor);
         }
     }
     return s;
@@ -666,7 +673,7 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
     if (sums.radius.empty() || cells == 0) return result;
     std::vector<std::shared_ptr<const DiscSamples>> discs(sums.radius.size());
     tbb::parallel_for(std::size_t(0), discs.size(), [&](std::size_t k) {
-        discs[k] = sharedDisc(sums.radius[k], options.cellWidth, options.cellHeight);
+        discs[k] = sharedDisc(sums.radius[k], options.cellWidth, options.cellHeight, sums.split[k]);
     });
     const HeightCoverage coverage(grid);
     // The heights with kLanes columns more on the right, so that a block of lanes past the

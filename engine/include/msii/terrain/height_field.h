@@ -11,8 +11,8 @@
 /// that area (A_o and H_o = ∫ h computed once per radius, exactly where the rim cuts a
 /// cell). On a plane this is the half ball exactly (V̂ = ½), and the sum of the heights over
 /// whole cells is the integral of the DEM's mesh (its triangles between cell centres) over
-/// them. S comes from V at r(1 ± 1/20), normalised by the same difference of the ball's
-/// volume.
+/// them. S comes from V at r(1 ± δ), normalised by the same difference of the ball's
+/// volume (heightFieldSphereStep).
 
 #include <msii/core/feature_set.h>
 #include <msii/core/run_context.h>
@@ -23,9 +23,19 @@
 
 namespace msii {
 
-/// S from V at r(1 ± kHeightFieldSphereStep): the central difference's error, a 1/600 of
-/// r² V‴ over V′, stays below 1e-4 of Ŝ on terrain.
+/// The largest relative step δ of heightFieldSphereStep: the discs of S reach to r(1 + δ).
 inline constexpr double kHeightFieldSphereStep = 0.05;
+
+/// S from V at r(1 ± δ): δ = a quarter of a cell over r, within [1/80, 1/20]. The central
+/// difference errs by (δr)²/6 of V‴ over V′, and V‴ grows where a wall or a bank of about a
+/// cell's width crosses the sphere, so the step is held to a fraction of a cell; a smaller
+/// one would carry more of the sums' own error (divided by 2δ), which on a disc of a few
+/// cells is the larger part (docs/method.md, Height fields).
+inline double heightFieldSphereStep(double r, double cell)
+{
+    const double step = 0.25 * cell / r;
+    return step < 0.0125 ? 0.0125 : (step > kHeightFieldSphereStep ? kHeightFieldSphereStep : step);
+}
 
 /// Heights on a grid: row-major, NaN where there are none.
 struct HeightGrid {
