@@ -1,6 +1,7 @@
 #include <msii/invariants/volume_sphere.h>
 #include <msii/invariants/scales.h>
 
+#include "../levelset/levelset_backend.h"
 #include "../levelset/levelset_impl.h"
 #include "../levelset/tile_sides.h"
 #include "cube_fraction.h"
@@ -703,8 +704,8 @@ void interpolateToVertices(const TriMesh& mesh, const LevelSet& levelSet, const 
 
 } // namespace
 
-VolumeSphereResult computeVolumeSphere(const TriMesh& mesh, const LevelSet& levelSet,
-                                       const VolumeSphereOptions& options, RunContext* progress)
+VolumeSphereResult detail::computeVolumeSphereHere(const TriMesh& mesh, const LevelSet& levelSet,
+                                                   const VolumeSphereOptions& options, RunContext* progress)
 {
     const auto& radii = options.radii;
     validateRadii(radii);

@@ -1,4 +1,5 @@
 #include "levelset_impl.h"
+#include "levelset_backend.h"
 #include "tile_sides.h"
 #include "band_raster.h"
 
@@ -27,23 +28,17 @@ void initializeOpenVdb()
 
 } // namespace
 
-LevelSet::LevelSet(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
-LevelSet::~LevelSet() = default;
-LevelSet::LevelSet(LevelSet&&) noexcept = default;
-LevelSet& LevelSet::operator=(LevelSet&&) noexcept = default;
+namespace {
 
-const LevelSetInfo& LevelSet::info() const { return mImpl->info; }
-
-const LevelSet::Impl& levelSetImpl(const LevelSet& levelSet) { return *levelSet.mImpl; }
-
-double LevelSet::signedDistance(const Vec3& world) const
+double signedDistanceOf(const LevelSet::Impl& impl, const Vec3& world)
 {
-    const openvdb::Vec3d xyz = mImpl->grid->transform().worldToIndex(
-        openvdb::Vec3d(world.x, world.y, world.z));
-    return openvdb::tools::BoxSampler::sample(mImpl->grid->tree(), xyz);
+    const openvdb::Vec3d xyz = impl.grid->transform().worldToIndex(openvdb::Vec3d(world.x, world.y, world.z));
+    return openvdb::tools::BoxSampler::sample(impl.grid->tree(), xyz);
 }
 
-LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options, RunContext* progress)
+} // namespace
+
+LevelSet detail::buildLevelSetHere(const TriMesh& mesh, const LevelSetOptions& options, RunContext* progress)
 {
     initializeOpenVdb();
     const double h = options.voxelSize;
@@ -120,7 +115,19 @@ LevelSet buildLevelSet(const TriMesh& mesh, const LevelSetOptions& options, RunC
     impl->info.halfWidth = options.halfWidth;
     impl->info.activeVoxels = grid->activeVoxelCount();
     impl->info.memoryBytes = grid->memUsage();
-    return LevelSet(std::move(impl));
+    return LevelSet(std::unique_ptr<LevelSet::Impl, LevelSet::ImplDeleter>(impl.release()));
 }
 
 } // namespace msii
+
+extern "C" const msii::detail::LevelSetBackend* msii_levelset_backend()
+{
+    static const msii::detail::LevelSetBackend backend{
+        &msii::detail::buildLevelSetHere,
+        &msii::detail::computeVolumeSphereHere,
+        [](msii::LevelSet::Impl* impl) { delete impl; },
+        [](const msii::LevelSet::Impl& impl) -> const msii::LevelSetInfo& { return impl.info; },
+        &msii::signedDistanceOf,
+    };
+    return &backend;
+}

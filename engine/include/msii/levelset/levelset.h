@@ -3,7 +3,10 @@
 /// @brief The mesh as a narrow-band signed distance field (OpenVDB), the first stage of the
 /// V and S computation (docs/method.md, Level set). OpenVDB types stay behind this header
 /// (pimpl) so that including it is cheap; engine code that needs the grid includes
-/// src/levelset/levelset_impl.h.
+/// src/levelset/levelset_impl.h. That code, and V and S on the level set, live in a library
+/// of their own (libmsii_levelset, next to libmsii), which libmsii loads when a level set is
+/// first built: a program that never builds one (a DEM on the height field, a picture, a
+/// metric) does not load OpenVDB, which takes 40 ms or more of every start.
 ///
 /// Sign convention: negative inside the solid, positive outside. The solid is what the
 /// triangles' normals point away from (counter-clockwise seen from outside):
@@ -44,8 +47,12 @@ struct LevelSetInfo {
 class LevelSet {
 public:
     struct Impl;
+    /// Deletes an Impl in the library where its type is complete (libmsii_levelset).
+    struct ImplDeleter {
+        void operator()(Impl* impl) const;
+    };
 
-    explicit LevelSet(std::unique_ptr<Impl> impl);
+    explicit LevelSet(std::unique_ptr<Impl, ImplDeleter> impl);
     ~LevelSet();
     LevelSet(LevelSet&&) noexcept;
     LevelSet& operator=(LevelSet&&) noexcept;
@@ -59,7 +66,7 @@ private:
     /// The OpenVDB grids, for the engine's own sources (src/levelset/levelset_impl.h).
     friend const Impl& levelSetImpl(const LevelSet& levelSet);
 
-    std::unique_ptr<Impl> mImpl;
+    std::unique_ptr<Impl, ImplDeleter> mImpl;
 };
 
 /// Builds the narrow-band signed distance field of @p mesh.
