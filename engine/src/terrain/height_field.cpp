@@ -6,6 +6,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <cmath>
@@ -15,6 +16,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -671,37 +673,49 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
         if (sums.belowOf[j] >= 0) result.sphere[j].assign(cells, nan);
     }
     if (sums.radius.empty() || cells == 0) return result;
+    // Three things independent of one another, side by side: the discs' quadratures, which
+    // cells have every height of a ball (HeightCoverage), and the padded heights with their
+    // runs' extremes and the rows' prefix sums.
     std::vector<std::shared_ptr<const DiscSamples>> discs(sums.radius.size());
-    tbb::parallel_for(std::size_t(0), discs.size(), [&](std::size_t k) {
-        discs[k] = sharedDisc(sums.radius[k], options.cellWidth, options.cellHeight, sums.split[k]);
-    });
-    const HeightCoverage coverage(grid);
+    std::optional<HeightCoverage> coverageOf;
     // The heights with kLanes columns more on the right, so that a block of lanes past the
     // own cells' last reads within the grid (those lanes are not used).
     const std::ptrdiff_t stride = grid.cols + kLanes;
-    std::vector<float> padded(std::size_t(stride) * std::size_t(grid.rows), 0.0f);
-    for (int row = 0; row < grid.rows; ++row)
-        std::copy_n(&grid.z[std::size_t(row) * std::size_t(grid.cols)], grid.cols, &padded[std::size_t(row) * std::size_t(stride)]);
-    // Cells without a height take 0 in the padded grid (a disc that reads one gets no value).
-    // Per padded cell: the largest and smallest height of the eight cells from it, and per
-    // row the prefix sums of the heights in 2⁻²³ m.
     const std::ptrdiff_t prefixStride = stride + 1;
-    std::vector<float> runHigh(padded.size()), runLow(padded.size());
-    std::vector<long long> prefix(std::size_t(prefixStride) * std::size_t(grid.rows));
-    tbb::parallel_for(0, grid.rows, [&](int row) {
-        float* z = &padded[std::size_t(row) * std::size_t(stride)];
-        for (std::ptrdiff_t c = 0; c < stride; ++c)
-            if (std::isnan(z[c])) z[c] = 0;
-        long long* sum = &prefix[std::size_t(row) * std::size_t(prefixStride)];
-        sum[0] = 0;
-        for (std::ptrdiff_t c = 0; c < stride; ++c) sum[c + 1] = sum[c] + std::llrint(double(z[c]) * kHeightScale);
-        float* high = &runHigh[std::size_t(row) * std::size_t(stride)];
-        float* low = &runLow[std::size_t(row) * std::size_t(stride)];
-        std::copy_n(z, stride, high);
-        std::copy_n(z, stride, low);
-        for (std::ptrdiff_t k = 1; k < 8; ++k)
-            for (std::ptrdiff_t c = 0; c + k < stride; ++c) high[c] = std::max(high[c], z[c + k]), low[c] = std::min(low[c], z[c + k]);
-    });
+    std::vector<float> padded, runHigh, runLow;
+    std::vector<long long> prefix;
+    tbb::parallel_invoke(
+        [&] {
+            tbb::parallel_for(std::size_t(0), discs.size(), [&](std::size_t k) {
+                discs[k] = sharedDisc(sums.radius[k], options.cellWidth, options.cellHeight, sums.split[k]);
+            });
+        },
+        [&] { coverageOf.emplace(grid); },
+        [&] {
+            padded.assign(std::size_t(stride) * std::size_t(grid.rows), 0.0f);
+            runHigh.resize(padded.size()), runLow.resize(padded.size());
+            prefix.resize(std::size_t(prefixStride) * std::size_t(grid.rows));
+            // Cells without a height take 0 in the padded grid (a disc that reads one gets no
+            // value). Per padded cell: the largest and smallest height of the eight cells from
+            // it, and per row the prefix sums of the heights in 2⁻²³ m.
+            tbb::parallel_for(0, grid.rows, [&](int row) {
+                float* z = &padded[std::size_t(row) * std::size_t(stride)];
+                std::copy_n(&grid.z[std::size_t(row) * std::size_t(grid.cols)], grid.cols, z);
+                for (std::ptrdiff_t c = 0; c < stride; ++c)
+                    if (std::isnan(z[c])) z[c] = 0;
+                long long* sum = &prefix[std::size_t(row) * std::size_t(prefixStride)];
+                sum[0] = 0;
+                for (std::ptrdiff_t c = 0; c < stride; ++c) sum[c + 1] = sum[c] + std::llrint(double(z[c]) * kHeightScale);
+                float* high = &runHigh[std::size_t(row) * std::size_t(stride)];
+                float* low = &runLow[std::size_t(row) * std::size_t(stride)];
+                std::copy_n(z, stride, high);
+                std::copy_n(z, stride, low);
+                for (std::ptrdiff_t k = 1; k < 8; ++k)
+                    for (std::ptrdiff_t c = 0; c + k < stride; ++c)
+                        high[c] = std::max(high[c], z[c + k]), low[c] = std::min(low[c], z[c + k]);
+            });
+        });
+    const HeightCoverage& coverage = *coverageOf;
     const DiscPlans plans = planDiscs(discs, options.cellWidth, options.cellHeight, stride);
     const std::size_t discCount = plans.discs.size();
     const int reach = plans.discs.back().reach;
