@@ -111,9 +111,13 @@ What limits the speed now, and the next steps:
   half, the taps that the rim cuts (weighed one by one) a fifth, the largest |z − z₀| over
   the disc (from runs of eight cells) a fifth, the whole cells inside (prefix sums of the
   rows) under a tenth. Of the pieces whose clamps are summed, about a third clamp: the
-  bound, one |z − z₀| for the whole disc, is loose on one side of a slope. Next: a bound
-  per sector of the disc, or the rim's pieces as annular sectors with h(ρ) integrated in
-  closed form, so that they can be longer.
+  bound, one |z − z₀| for the whole disc, is loose on one side of a slope; a bound per
+  sixteenth of the disc would halve the pieces summed, but its own maxima cost about as
+  many loads as the pieces it saves. Next: the rim's pieces as annular sectors with h(ρ)
+  integrated in closed form, so that they can be longer. On a 1000 × 1000 DEM at R = 10
+  cells (under half a second), the kernel is about half; the process's start (loading
+  GDAL's libraries) takes 0.05 s, and reading the coordinate system (PROJ's database)
+  0.015 s.
 
 This machine's timings vary from one sitting to the next, by 15–20 % within a day and by up
 to 2× between days, also in stages whose code did not change: compare builds in alternating
