@@ -173,4 +173,3 @@ TEST(HeightField, RoughTerrainAgainstTheExactMode)
         }
     }
 }
-

@@ -28,7 +28,8 @@ const LevelSetBackend* loadBackend()
     }
     void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
     if (handle == nullptr && path != name) {
-        tried = dlerror();
+        const char* error = dlerror();
+        tried = error ? error : path + ": not found";
         handle = dlopen(name.c_str(), RTLD_NOW | RTLD_LOCAL);
     }
     if (handle == nullptr) {

@@ -119,13 +119,15 @@ void RasterPieceWriter::write(int band, int col0, int row0, int cols, int rows, 
         std::vector<std::uint16_t> raw(std::size_t(cols) * std::size_t(rows));
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, raw.size(), 1 << 16), [&](const tbb::blocked_range<std::size_t>& range) {
             for (std::size_t k = range.begin(); k < range.end(); ++k) {
+                if (std::isnan(values[k])) {
+                    raw[k] = std::uint16_t(kScaled16Nodata);
+                    continue;
+                }
                 // The nearest step, halves away from 0 (std::lround's rule, inline: a call per
                 // value was a few percent of a DEM's run), within [0, nodata).
-                const double x = std::clamp(double(values[k]) / kScaled16Step, -1.0, double(kScaled16Nodata));
+                const double x = std::clamp(double(values[k]) / kScaled16Step, 0.0, double(kScaled16Nodata - 1));
                 const long whole = long(x);
-                const long nearest = whole + (x - double(whole) >= 0.5 ? 1 : 0);
-                raw[k] = std::isnan(values[k]) ? std::uint16_t(kScaled16Nodata)
-                                               : std::uint16_t(std::clamp(nearest, 0L, long(kScaled16Nodata) - 1));
+                raw[k] = std::uint16_t(whole + (x - double(whole) >= 0.5 ? 1 : 0));
             }
         });
         if (m.dataset->GetRasterBand(band + 1)->RasterIO(GF_Write, col0, row0, cols, rows, raw.data(), cols, rows,
