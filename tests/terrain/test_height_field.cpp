@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -172,4 +173,37 @@ TEST(HeightField, RoughTerrainAgainstTheExactMode)
             }
         }
     }
+}
+
+TEST(HeightField, EveryBlockAgreesWithTheCellAlone)
+{
+    // Cells are summed 16, 8 or 1 at a time, as the own rectangle's width, the grid's edge
+    // and gaps allow: each way gives the cell's values bit for bit.
+    const Dem dem = makeDem(80, 1.0, 0.15, 11, steepTerrain);
+    HeightGrid grid = gridOf(dem);
+    for (int r = 30; r < 34; ++r)
+        for (int c = 50; c < 53; ++c) grid.z[std::size_t(r) * 80 + std::size_t(c)] = std::numeric_limits<float>::quiet_NaN();
+    HeightFieldOptions ho;
+    ho.radii = radiiUpTo(6.0, 4);
+    ho.cellWidth = ho.cellHeight = 1.0;
+    std::size_t compared = 0, valued = 0;
+    for (const GridRect own : {GridRect{0, 0, 80, 80}, GridRect{7, 9, 41, 30}, GridRect{13, 21, 17, 5}, GridRect{3, 40, 9, 3}}) {
+        const HeightFieldResult block = computeHeightField(grid, own, ho);
+        for (int r = 0; r < own.rows; r += 3)
+            for (int c = 0; c < own.cols; ++c) {
+                const HeightFieldResult alone = computeHeightField(grid, {own.col + c, own.row + r, 1, 1}, ho);
+                const std::size_t at = std::size_t(r) * std::size_t(own.cols) + std::size_t(c);
+                for (std::size_t j = 0; j < ho.radii.size(); ++j) {
+                    const float v = block.volume[j][at], s = block.sphere[j][at];
+                    ASSERT_EQ(std::isnan(v), std::isnan(alone.volume[j][0])) << own.col + c << ", " << own.row + r;
+                    ASSERT_EQ(std::isnan(s), std::isnan(alone.sphere[j][0])) << own.col + c << ", " << own.row + r;
+                    if (!std::isnan(v)) ASSERT_EQ(v, alone.volume[j][0]) << own.col + c << ", " << own.row + r << ", r " << ho.radii[j];
+                    if (!std::isnan(s)) ASSERT_EQ(s, alone.sphere[j][0]) << own.col + c << ", " << own.row + r << ", r " << ho.radii[j];
+                    valued += !std::isnan(v);
+                    ++compared;
+                }
+            }
+    }
+    EXPECT_GT(compared, 10000u);
+    EXPECT_GT(valued, compared / 2);  // most cells have their balls' heights
 }

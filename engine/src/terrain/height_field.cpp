@@ -499,79 +499,120 @@ struct DiscGrid {
     const long long* prefix; ///< Σ of the row's heights before here, in 2⁻²³ m
 };
 
-/// For kLanes consecutive cells (lane k at column offset k) at heights @p z0, V(r) − ⅔πr³ of
-/// the first @p count discs of @p plans, into @p sums (kLanes per disc, in that order):
-/// Σ_o W_o (z_o − z₀) over the taps, then C over the pieces whose h̄ is at most the lane's
-/// largest |z_o − z₀| over the disc's taps (a piece past it has |z − z₀| < h̄: no clamp,
-/// nothing to add). The sum of each lane depends on its own cells only, and a disc's on the
-/// discs before it only, so that a cell gets the same value in every block, window and tile,
-/// whatever the number of discs summed. Compiled for AVX2 as well (chosen at run time).
-__attribute__((target_clones("avx2", "default"))) void sumDiscs(const DiscGrid& g, const DiscPlans& plans,
-                                                               const float* z0lanes, std::size_t count, double* sums)
+/// For kLanes · H consecutive cells (lane k at column offset k) at heights @p z0lanes,
+/// V(r) − ⅔πr³ of the first @p count discs of @p plans, into @p sums (kLanes · H per disc, in
+/// that order): Σ_o W_o (z_o − z₀) over the taps, then C over the pieces whose h̄ is at most the
+/// lanes' largest |z_o − z₀| over the disc's taps (a piece past a lane's own has |z − z₀| < h̄
+/// there: no clamp, nothing to add, and it adds an exact zero). The sum of each lane depends on
+/// its own cells only, and a disc's on the discs before it only, so that a cell gets the same
+/// value in every block, window and tile, whatever H and the number of discs summed. H = 2
+/// shares the pieces' offsets, weights and loop between two halves of eight lanes. Compiled for
+/// AVX2 as well (chosen at run time).
+template <int H>
+MSII_LANES void sumDiscsOf(const DiscGrid& g, const DiscPlans& plans, const float* z0lanes, std::size_t count, double* sums)
 {
-    const Lanes z0 = loadLanes(z0lanes), zero = MSII_BROADCAST(0);
-    const LaneDoubles z0wide = __builtin_convertvector(z0, LaneDoubles);
+    constexpr int W = kLanes * H;
+    const Lanes zero = MSII_BROADCAST(0);
+    Lanes z0[H];
+    LaneDoubles z0wide[H];
+    for (int h = 0; h < H; ++h) {
+        z0[h] = loadLanes(z0lanes + h * kLanes);
+        z0wide[h] = __builtin_convertvector(z0[h], LaneDoubles);
+    }
     const float* z = g.z;
     // The largest and smallest height over the taps so far (disc by disc, nested): the
     // largest |z_o − z₀| is the larger of high − z₀ and z₀ − low, rounded alike.
-    Lanes high = z0, low = z0;
+    Lanes high[H], low[H];
+    for (int h = 0; h < H; ++h) high[h] = low[h] = z0[h];
     for (std::size_t k = 0; k < count; ++k) {
         const DiscPlan& disc = plans.discs[k];
-        for (const std::ptrdiff_t at : disc.runAt) {
-            high = maxLanes(high, loadLanes(g.runHigh + at));
-            low = minLanes(low, loadLanes(g.runLow + at));
-        }
-        for (const std::ptrdiff_t at : disc.cellAt) {
-            const Lanes v = loadLanes(z + at);
-            high = maxLanes(high, v);
-            low = minLanes(low, v);
-        }
-        const Lanes reach = maxLanes(high - z0, z0 - low);
-        // Two halves of four lanes, each a register in the AVX2 clone (a vector of eight
-        // lives on the stack there).
-        LaneQuads coreLeft = {}, coreRight = {};
+        for (const std::ptrdiff_t at : disc.runAt)
+            for (int h = 0; h < H; ++h) {
+                high[h] = maxLanes(high[h], loadLanes(g.runHigh + at + h * kLanes));
+                low[h] = minLanes(low[h], loadLanes(g.runLow + at + h * kLanes));
+            }
+        for (const std::ptrdiff_t at : disc.cellAt)
+            for (int h = 0; h < H; ++h) {
+                const Lanes v = loadLanes(z + at + h * kLanes);
+                high[h] = maxLanes(high[h], v);
+                low[h] = minLanes(low[h], v);
+            }
+        Lanes reach[H];
+        for (int h = 0; h < H; ++h) reach[h] = maxLanes(high[h] - z0[h], z0[h] - low[h]);
+        // Each half in two quarters of four lanes, each a register in the AVX2 clone (a
+        // vector of eight lives on the stack there).
+        LaneQuads coreLeft[H] = {}, coreRight[H] = {};
         const std::size_t rows = disc.coreFrom.size();
         for (std::size_t i = 0; i < rows; ++i) {
             const long long *to = g.prefix + disc.coreTo[i], *from = g.prefix + disc.coreFrom[i];
-            LaneQuads toLeft, toRight, fromLeft, fromRight;
-            std::memcpy(&toLeft, to, sizeof toLeft);
-            std::memcpy(&toRight, to + 4, sizeof toRight);
-            std::memcpy(&fromLeft, from, sizeof fromLeft);
-            std::memcpy(&fromRight, from + 4, sizeof fromRight);
-            coreLeft += toLeft - fromLeft;
-            coreRight += toRight - fromRight;
+            for (int h = 0; h < H; ++h) {
+                LaneQuads toLeft, toRight, fromLeft, fromRight;
+                std::memcpy(&toLeft, to + h * kLanes, sizeof toLeft);
+                std::memcpy(&toRight, to + h * kLanes + 4, sizeof toRight);
+                std::memcpy(&fromLeft, from + h * kLanes, sizeof fromLeft);
+                std::memcpy(&fromRight, from + h * kLanes + 4, sizeof fromRight);
+                coreLeft[h] += toLeft - fromLeft;
+                coreRight[h] += toRight - fromRight;
+            }
         }
         const std::size_t rims = disc.rim.size();
         const DiscPlan::Tap* rim = disc.rim.data();
-        Lanes rimEven = zero, rimOdd = zero;
+        Lanes rimEven[H], rimOdd[H];
+        for (int h = 0; h < H; ++h) rimEven[h] = rimOdd[h] = zero;
         std::size_t i = 0;
         for (; i + 2 <= rims; i += 2) {
-            rimEven += MSII_BROADCAST(rim[i].weight) * (loadLanes(z + rim[i].at) - z0);
-            rimOdd += MSII_BROADCAST(rim[i + 1].weight) * (loadLanes(z + rim[i + 1].at) - z0);
+            const Lanes even = MSII_BROADCAST(rim[i].weight), odd = MSII_BROADCAST(rim[i + 1].weight);
+            for (int h = 0; h < H; ++h) {
+                rimEven[h] += even * (loadLanes(z + rim[i].at + h * kLanes) - z0[h]);
+                rimOdd[h] += odd * (loadLanes(z + rim[i + 1].at + h * kLanes) - z0[h]);
+            }
         }
-        if (i < rims) rimEven += MSII_BROADCAST(rim[i].weight) * (loadLanes(z + rim[i].at) - z0);
+        if (i < rims)
+            for (int h = 0; h < H; ++h)
+                rimEven[h] += MSII_BROADCAST(rim[i].weight) * (loadLanes(z + rim[i].at + h * kLanes) - z0[h]);
         float most = 0;
-        for (int l = 0; l < kLanes; ++l) most = std::max(most, reach[l]);
+        for (int h = 0; h < H; ++h)
+            for (int l = 0; l < kLanes; ++l) most = std::max(most, reach[h][l]);
         const std::size_t n = disc.pieces.size();
         const DiscPlan::Piece* pieces = disc.pieces.data();
-        Lanes clamps = zero;
+        Lanes clamps[H];
+        for (int h = 0; h < H; ++h) clamps[h] = zero;
         for (i = 0; i < n && pieces[i].halfChord <= most; ++i) {
             const DiscPlan::Piece& p = pieces[i];
-            const Lanes hi = MSII_BROADCAST(p.halfChord);
-            const Lanes below = MSII_BROADCAST(p.weight[0]) * loadLanes(z + p.at[0]) +
-                                MSII_BROADCAST(p.weight[1]) * loadLanes(z + p.at[1]) +
-                                MSII_BROADCAST(p.weight[2]) * loadLanes(z + p.at[2]) - z0 + hi;
-            const Lanes clamped = minLanes(maxLanes(below, zero), hi + hi) - below;
-            clamps += Lanes(LaneMask(MSII_BROADCAST(p.area) * clamped) & LaneMask(hi <= reach));
+            const Lanes hi = MSII_BROADCAST(p.halfChord), w0 = MSII_BROADCAST(p.weight[0]), w1 = MSII_BROADCAST(p.weight[1]),
+                        w2 = MSII_BROADCAST(p.weight[2]), area = MSII_BROADCAST(p.area), twice = hi + hi;
+            for (int h = 0; h < H; ++h) {
+                const Lanes below = w0 * loadLanes(z + p.at[0] + h * kLanes) + w1 * loadLanes(z + p.at[1] + h * kLanes) +
+                                    w2 * loadLanes(z + p.at[2] + h * kLanes) - z0[h] + hi;
+                const Lanes clamped = minLanes(maxLanes(below, zero), twice) - below;
+                clamps[h] += Lanes(LaneMask(area * clamped) & LaneMask(hi <= reach[h]));
+            }
         }
-        LaneInts core;
-        std::memcpy(&core, &coreLeft, sizeof coreLeft);
-        std::memcpy(reinterpret_cast<char*>(&core) + sizeof coreLeft, &coreRight, sizeof coreRight);
-        const LaneDoubles coreSum = __builtin_convertvector(core, LaneDoubles) * (1 / kHeightScale) - disc.coreCount * z0wide;
-        const LaneDoubles total = double(plans.coreWeight) * coreSum + __builtin_convertvector(rimEven + rimOdd, LaneDoubles) +
-                                  __builtin_convertvector(clamps, LaneDoubles);
-        std::memcpy(sums + k * kLanes, &total, sizeof total);
+        for (int h = 0; h < H; ++h) {
+            LaneInts core;
+            std::memcpy(&core, &coreLeft[h], sizeof coreLeft[h]);
+            std::memcpy(reinterpret_cast<char*>(&core) + sizeof coreLeft[h], &coreRight[h], sizeof coreRight[h]);
+            const LaneDoubles coreSum =
+                __builtin_convertvector(core, LaneDoubles) * (1 / kHeightScale) - disc.coreCount * z0wide[h];
+            const LaneDoubles total = double(plans.coreWeight) * coreSum +
+                                      __builtin_convertvector(rimEven[h] + rimOdd[h], LaneDoubles) +
+                                      __builtin_convertvector(clamps[h], LaneDoubles);
+            std::memcpy(sums + k * W + h * kLanes, &total, sizeof total);
+        }
     }
+}
+
+__attribute__((target_clones("avx2", "default"))) void sumDiscs(const DiscGrid& g, const DiscPlans& plans,
+                                                               const float* z0lanes, std::size_t count, double* sums)
+{
+    sumDiscsOf<1>(g, plans, z0lanes, count, sums);
+}
+
+/// sumDiscs for two blocks of kLanes side by side (2 · kLanes lanes).
+__attribute__((target_clones("avx2", "default"))) void sumDiscsTwice(const DiscGrid& g, const DiscPlans& plans,
+                                                                    const float* z0lanes, std::size_t count, double* sums)
+{
+    sumDiscsOf<2>(g, plans, z0lanes, count, sums);
 }
 
 /// What one cell of the own rectangle needs: whether every cell of its largest ball has a
@@ -725,11 +766,53 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
 
     if (context) context->start("V and S from the heights", std::size_t(own.rows));
     tbb::parallel_for(tbb::blocked_range<int>(0, own.rows), [&](const tbb::blocked_range<int>& range) {
-        std::vector<double> volume(discCount * kLanes), one(discCount * kLanes);
+        std::vector<double> volume(discCount * kLanes * 2), one(discCount * kLanes);
         std::size_t complete[kLanes];  // per lane: the discs, in the nested order, it has every height of
+        // The values of lanes [0, lanes) of the block at own column c from its sums (@p width per disc).
+        const auto store = [&](int r, int c, int lanes, std::size_t width, const std::size_t* completeOf) {
+            const auto done = [&](int s, int k) { return s >= 0 && slot[std::size_t(s)] < completeOf[k]; };
+            const auto sum = [&](int s, int k) { return volume[slot[std::size_t(s)] * width + std::size_t(k)]; };
+            for (int k = 0; k < lanes; ++k) {
+                const std::size_t cell = std::size_t(r) * std::size_t(own.cols) + std::size_t(c + k);
+                for (std::size_t j = 0; j < n; ++j) {
+                    const double rj = options.radii[j];
+                    if (done(sums.volumeOf[j], k))
+                        result.volume[j][cell] = float(0.5 + sum(sums.volumeOf[j], k) / (4.0 / 3.0 * kPi * rj * rj * rj));
+                    if (done(sums.belowOf[j], k) && done(sums.aboveOf[j], k)) {
+                        const double below = sums.radius[std::size_t(sums.belowOf[j])],
+                                     above = sums.radius[std::size_t(sums.aboveOf[j])];
+                        const double dv = sum(sums.aboveOf[j], k) - sum(sums.belowOf[j], k);
+                        result.sphere[j][cell] =
+                            float(0.5 + dv / (4.0 / 3.0 * kPi * (above * above * above - below * below * below)));
+                    }
+                }
+            }
+        };
+        const auto gridAt = [&](int row, int col) {
+            const std::size_t at = std::size_t(row) * std::size_t(stride) + std::size_t(col);
+            return DiscGrid{&padded[at], &runHigh[at], &runLow[at],
+                            &prefix[std::size_t(row) * std::size_t(prefixStride) + std::size_t(col)]};
+        };
+        const auto interior = [&](int col, int last, int row) {
+            return col - reach >= 0 && last + reach < grid.cols && row - reach >= 0 && row + reach < grid.rows &&
+                   coverage.complete(col, last, row, reach, grid.rows);
+        };
+        const std::size_t whole[2 * kLanes] = {discCount, discCount, discCount, discCount, discCount, discCount,
+                                               discCount, discCount, discCount, discCount, discCount, discCount,
+                                               discCount, discCount, discCount, discCount};
         for (int r = range.begin(); r < range.end(); ++r) {
             const int row = own.row + r;
             for (int c = 0; c < own.cols; c += kLanes) {
+                // Most pairs of blocks have every height of their largest discs, and lie
+                // farther than R from the grid's edge: summed together.
+                if (c + 2 * kLanes <= own.cols && interior(own.col + c, own.col + c + 2 * kLanes - 1, row)) {
+                    float z0[2 * kLanes];
+                    for (int k = 0; k < 2 * kLanes; ++k) z0[k] = grid.at(own.col + c + k, row);
+                    sumDiscsTwice(gridAt(row, own.col + c), plans, z0, discCount, volume.data());
+                    store(r, c, 2 * kLanes, 2 * kLanes, whole);
+                    c += kLanes;
+                    continue;
+                }
                 const int lanes = std::min(kLanes, own.cols - c);
                 bool all = true, any = false;
                 // Most blocks have every height of their largest discs: that is tried first.
@@ -754,9 +837,7 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
                 if (!any) continue;
                 float z0[kLanes];
                 for (int k = 0; k < kLanes; ++k) z0[k] = k < lanes ? grid.at(own.col + c + k, row) : 0.0f;
-                const std::size_t at = std::size_t(row) * std::size_t(stride) + std::size_t(own.col + c);
-                const DiscGrid blockGrid{&padded[at], &runHigh[at], &runLow[at],
-                                         &prefix[std::size_t(row) * std::size_t(prefixStride) + std::size_t(own.col + c)]};
+                const DiscGrid blockGrid = gridAt(row, own.col + c);
                 const bool inside = all && own.col + c - reach >= 0 && own.col + c + reach < grid.cols && row - reach >= 0 &&
                                     row + reach < grid.rows;
                 if (inside) {
@@ -774,23 +855,7 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
                         for (std::size_t s = 0; s < complete[k]; ++s) volume[s * kLanes + std::size_t(k)] = one[s * kLanes];
                     }
                 }
-                const auto done = [&](int s, int k) { return s >= 0 && slot[std::size_t(s)] < complete[k]; };
-                const auto sum = [&](int s, int k) { return volume[slot[std::size_t(s)] * kLanes + std::size_t(k)]; };
-                for (int k = 0; k < lanes; ++k) {
-                    const std::size_t cell = std::size_t(r) * std::size_t(own.cols) + std::size_t(c + k);
-                    for (std::size_t j = 0; j < n; ++j) {
-                        const double rj = options.radii[j];
-                        if (done(sums.volumeOf[j], k))
-                            result.volume[j][cell] = float(0.5 + sum(sums.volumeOf[j], k) / (4.0 / 3.0 * kPi * rj * rj * rj));
-                        if (done(sums.belowOf[j], k) && done(sums.aboveOf[j], k)) {
-                            const double below = sums.radius[std::size_t(sums.belowOf[j])],
-                                         above = sums.radius[std::size_t(sums.aboveOf[j])];
-                            const double dv = sum(sums.aboveOf[j], k) - sum(sums.belowOf[j], k);
-                            result.sphere[j][cell] =
-                                float(0.5 + dv / (4.0 / 3.0 * kPi * (above * above * above - below * below * below)));
-                        }
-                    }
-                }
+                store(r, c, lanes, kLanes, complete);
             }
             if (context) context->advance();
         }
