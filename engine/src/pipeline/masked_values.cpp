@@ -1,6 +1,10 @@
 #include <msii/pipeline/masked_values.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 #include <cmath>
+#include <functional>
 #include <iomanip>
 #include <sstream>
 
@@ -31,13 +35,24 @@ void MaskedValues::add(const FeatureSet& features, const std::vector<float>& fil
 void MaskedValues::add(const FeatureSet& features, const std::vector<float>& filledShare,
                        const std::vector<std::uint32_t>& rows)
 {
-    for (std::uint32_t i : rows) withFilledShare += filledShare[i] > 0;
+    // Counted in parallel (a DEM's window has millions of cells); counts add up alike in
+    // any order.
+    const auto count = [&](auto&& counts) {
+        return tbb::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, rows.size(), 1 << 16), std::size_t(0),
+            [&](const tbb::blocked_range<std::size_t>& range, std::size_t n) {
+                for (std::size_t k = range.begin(); k < range.end(); ++k) n += counts(rows[k]);
+                return n;
+            },
+            std::plus<std::size_t>());
+    };
+    withFilledShare += count([&](std::uint32_t i) { return filledShare[i] > 0; });
     const FeatureColumns* columns = countedColumns(features);
     if (!columns) return;
     perRadius.resize(columns->size(), 0);
     for (std::size_t j = 0; j < columns->size(); ++j)
         if (!(*columns)[j].empty())  // a radius not computed (a DEM's bands need a few)
-            for (std::uint32_t i : rows) perRadius[j] += std::isnan((*columns)[j][i]);
+            perRadius[j] += count([&](std::uint32_t i) { return std::isnan((*columns)[j][i]); });
     vertices += rows.size();
 }
 

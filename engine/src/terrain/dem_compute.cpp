@@ -542,6 +542,7 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
         }
     });
     std::vector<std::uint32_t> inFace;
+    inFace.reserve(nOwn);
     for (std::size_t k = 0; k < nOwn; ++k)
         if (onSurface[k]) inFace.push_back(std::uint32_t(k));
     std::size_t squares = 0;
@@ -555,7 +556,7 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
     if (!hf.volume.empty()) features[Invariant::Volume] = std::move(hf.volume);
     if (!hf.sphere.empty()) features[Invariant::Sphere] = std::move(hf.sphere);
     result.masked.add(features, filledShare, inFace);
-    std::vector<VertexProperty> props = outputProperties(std::move(features), filledShare);
+    std::vector<VertexProperty> props = outputProperties(std::move(features), std::move(filledShare));
     for (std::size_t b = 0; b < result.bands.size(); ++b) {
         const std::string& name = result.bands[b];
         const bool height = name == "height";  // found once per band, not per cell
@@ -565,7 +566,7 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
                 const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x),
                                   at = win.boxCell(win.col + x, win.row + y);
                 // Not on the surface: nodata in every band but the height.
-                cells[b][at] = height ? win.dem.heights[at] : std::isnan(filledShare[k]) ? nan : p->values[k];
+                cells[b][at] = height ? win.dem.heights[at] : !onSurface[k] ? nan : p->values[k];
             }
         });
     }

@@ -197,23 +197,35 @@ void continueBorders(Grid& g, const GridContinuationOptions& o, GridContinuation
         return (a[0] * o.cellWidth) * (a[0] * o.cellWidth) + (a[1] * o.cellHeight) * (a[1] * o.cellHeight);
     };
     std::stable_sort(offsets.begin(), offsets.end(), [&](const auto& a, const auto& b) { return d2(a) < d2(b); });
-    // Chessboard distance to the nearest height, to skip cells farther than the margin.
-    std::vector<int> near(g.z.size(), m + 1);
-    for (std::size_t c = 0; c < g.z.size(); ++c)
-        if (!std::isnan(g.z[c])) near[c] = 0;
-    // Two raster scans: exact for the chessboard distance.
-    for (int y = 0; y < g.rows; ++y)
+    // Chessboard distance to the nearest height (at most m + 1), to skip cells farther than
+    // the margin: per row the distance along it, then per NaN cell the least over the rows
+    // within m of max(|dy|, that row's distance). Rows in parallel.
+    const int far = m + 1;
+    std::vector<int> along(g.z.size(), far), near(g.z.size(), 0);
+    tbb::parallel_for(0, g.rows, [&](int y) {
+        int* d = &along[g.at(0, y)];
+        const float* z = &g.z[g.at(0, y)];
+        for (int x = 0, last = -far; x < g.cols; ++x) {
+            if (!std::isnan(z[x])) last = x;
+            d[x] = std::min(far, x - last);
+        }
+        for (int x = g.cols - 1, next = g.cols - 1 + far; x >= 0; --x) {
+            if (!std::isnan(z[x])) next = x;
+            d[x] = std::min(d[x], next - x);
+        }
+    });
+    tbb::parallel_for(0, g.rows, [&](int y) {
         for (int x = 0; x < g.cols; ++x) {
-            int& d = near[g.at(x, y)];
-            for (const auto& [dx, dy] : {std::pair{-1, 0}, std::pair{-1, -1}, std::pair{0, -1}, std::pair{1, -1}})
-                if (g.inside(x + dx, y + dy)) d = std::min(d, near[g.at(x + dx, y + dy)] + 1);
+            const std::size_t c = g.at(x, y);
+            if (along[c] == 0) continue;
+            int d = along[c];
+            for (int dy = 1; dy <= m && dy < d; ++dy) {
+                if (y - dy >= 0) d = std::min(d, std::max(dy, along[g.at(x, y - dy)]));
+                if (y + dy < g.rows) d = std::min(d, std::max(dy, along[g.at(x, y + dy)]));
+            }
+            near[c] = d;
         }
-    for (int y = g.rows - 1; y >= 0; --y)
-        for (int x = g.cols - 1; x >= 0; --x) {
-            int& d = near[g.at(x, y)];
-            for (const auto& [dx, dy] : {std::pair{1, 0}, std::pair{1, 1}, std::pair{0, 1}, std::pair{-1, 1}})
-                if (g.inside(x + dx, y + dy)) d = std::min(d, near[g.at(x + dx, y + dy)] + 1);
-        }
+    });
     const std::vector<float> z = g.z;  // heights and filled gaps: what the continuation reads
     // Row by row in parallel: a cell's value depends on z only (each thread keeps the planes
     // it has fitted; a plane is the same whoever fits it).
