@@ -499,120 +499,165 @@ struct DiscGrid {
     const long long* prefix; ///< Σ of the row's heights before here, in 2⁻²³ m
 };
 
-/// For kLanes · H consecutive cells (lane k at column offset k) at heights @p z0lanes,
-/// V(r) − ⅔πr³ of the first @p count discs of @p plans, into @p sums (kLanes · H per disc, in
-/// that order): Σ_o W_o (z_o − z₀) over the taps, then C over the pieces whose h̄ is at most the
-/// lanes' largest |z_o − z₀| over the disc's taps (a piece past a lane's own has |z − z₀| < h̄
-/// there: no clamp, nothing to add, and it adds an exact zero). The sum of each lane depends on
-/// its own cells only, and a disc's on the discs before it only, so that a cell gets the same
-/// value in every block, window and tile, whatever H and the number of discs summed. H = 2
-/// shares the pieces' offsets, weights and loop between two halves of eight lanes. Compiled for
-/// AVX2 as well (chosen at run time).
-template <int H>
+/// Sixteen floats, one per lane: one AVX-512 register (sumDiscsWide's AVX-512 variant).
+typedef float Lanes16 __attribute__((vector_size(64)));
+
+template <class V>
+MSII_LANES V loadAs(const float* p)
+{
+    V v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+template <class V>
+MSII_LANES V maxOf(V a, V b)
+{
+    return a > b ? a : b;
+}
+template <class V>
+MSII_LANES V minOf(V a, V b)
+{
+    return a < b ? a : b;
+}
+/// A float in every lane of a V (a macro for the reason of MSII_BROADCAST).
+#define MSII_BROADCAST_AS(V, x) (float(x) - V{})
+
+/// For kLanes · M consecutive cells (lane k at column offset k), M = H · (lanes of V) / kLanes,
+/// at heights @p z0lanes, V(r) − ⅔πr³ of the first @p count discs of @p plans, into @p sums
+/// (kLanes · M per disc, in that order): Σ_o W_o (z_o − z₀) over the taps, then C over the
+/// pieces whose h̄ is at most the lanes' largest |z_o − z₀| over the disc's taps (a piece past
+/// a lane's own has |z − z₀| < h̄ there: no clamp, nothing to add, and it adds an exact zero).
+/// The sum of each lane depends on its own cells only, and a disc's on the discs before it
+/// only, so that a cell gets the same value in every block, window and tile, whatever the
+/// lanes summed together and the number of discs summed: every lane takes the same operations
+/// in the same order (no fused multiply-add: the file is compiled with -ffp-contract=off).
+/// H vectors V side by side share the pieces' offsets, weights and loop.
+template <int H, class V>
 MSII_LANES void sumDiscsOf(const DiscGrid& g, const DiscPlans& plans, const float* z0lanes, std::size_t count, double* sums)
 {
-    constexpr int W = kLanes * H;
-    const Lanes zero = MSII_BROADCAST(0);
-    Lanes z0[H];
-    LaneDoubles z0wide[H];
-    for (int h = 0; h < H; ++h) {
-        z0[h] = loadLanes(z0lanes + h * kLanes);
-        z0wide[h] = __builtin_convertvector(z0[h], LaneDoubles);
-    }
+    constexpr int L = int(sizeof(V) / sizeof(float)), W = H * L;
+    static_assert(W % kLanes == 0, "whole blocks of eight lanes");
+    const V zero = MSII_BROADCAST_AS(V, 0);
+    V z0[H];
+    for (int h = 0; h < H; ++h) z0[h] = loadAs<V>(z0lanes + h * L);
     const float* z = g.z;
     // The largest and smallest height over the taps so far (disc by disc, nested): the
     // largest |z_o − z₀| is the larger of high − z₀ and z₀ − low, rounded alike.
-    Lanes high[H], low[H];
+    V high[H], low[H];
     for (int h = 0; h < H; ++h) high[h] = low[h] = z0[h];
     for (std::size_t k = 0; k < count; ++k) {
         const DiscPlan& disc = plans.discs[k];
         for (const std::ptrdiff_t at : disc.runAt)
             for (int h = 0; h < H; ++h) {
-                high[h] = maxLanes(high[h], loadLanes(g.runHigh + at + h * kLanes));
-                low[h] = minLanes(low[h], loadLanes(g.runLow + at + h * kLanes));
+                high[h] = maxOf(high[h], loadAs<V>(g.runHigh + at + h * L));
+                low[h] = minOf(low[h], loadAs<V>(g.runLow + at + h * L));
             }
         for (const std::ptrdiff_t at : disc.cellAt)
             for (int h = 0; h < H; ++h) {
-                const Lanes v = loadLanes(z + at + h * kLanes);
-                high[h] = maxLanes(high[h], v);
-                low[h] = minLanes(low[h], v);
+                const V v = loadAs<V>(z + at + h * L);
+                high[h] = maxOf(high[h], v);
+                low[h] = minOf(low[h], v);
             }
-        Lanes reach[H];
-        for (int h = 0; h < H; ++h) reach[h] = maxLanes(high[h] - z0[h], z0[h] - low[h]);
-        // Each half in two quarters of four lanes, each a register in the AVX2 clone (a
+        V reach[H];
+        for (int h = 0; h < H; ++h) reach[h] = maxOf(high[h] - z0[h], z0[h] - low[h]);
+        // The core sums in quarters of four lanes, each a register in the AVX2 variant (a
         // vector of eight lives on the stack there).
-        LaneQuads coreLeft[H] = {}, coreRight[H] = {};
+        constexpr int Q = W / 4;
+        LaneQuads core[Q] = {};
         const std::size_t rows = disc.coreFrom.size();
         for (std::size_t i = 0; i < rows; ++i) {
             const long long *to = g.prefix + disc.coreTo[i], *from = g.prefix + disc.coreFrom[i];
-            for (int h = 0; h < H; ++h) {
-                LaneQuads toLeft, toRight, fromLeft, fromRight;
-                std::memcpy(&toLeft, to + h * kLanes, sizeof toLeft);
-                std::memcpy(&toRight, to + h * kLanes + 4, sizeof toRight);
-                std::memcpy(&fromLeft, from + h * kLanes, sizeof fromLeft);
-                std::memcpy(&fromRight, from + h * kLanes + 4, sizeof fromRight);
-                coreLeft[h] += toLeft - fromLeft;
-                coreRight[h] += toRight - fromRight;
+            for (int q = 0; q < Q; ++q) {
+                LaneQuads a, b;
+                std::memcpy(&a, to + 4 * q, sizeof a);
+                std::memcpy(&b, from + 4 * q, sizeof b);
+                core[q] += a - b;
             }
         }
         const std::size_t rims = disc.rim.size();
         const DiscPlan::Tap* rim = disc.rim.data();
-        Lanes rimEven[H], rimOdd[H];
+        V rimEven[H], rimOdd[H];
         for (int h = 0; h < H; ++h) rimEven[h] = rimOdd[h] = zero;
         std::size_t i = 0;
         for (; i + 2 <= rims; i += 2) {
-            const Lanes even = MSII_BROADCAST(rim[i].weight), odd = MSII_BROADCAST(rim[i + 1].weight);
+            const V even = MSII_BROADCAST_AS(V, rim[i].weight), odd = MSII_BROADCAST_AS(V, rim[i + 1].weight);
             for (int h = 0; h < H; ++h) {
-                rimEven[h] += even * (loadLanes(z + rim[i].at + h * kLanes) - z0[h]);
-                rimOdd[h] += odd * (loadLanes(z + rim[i + 1].at + h * kLanes) - z0[h]);
+                rimEven[h] += even * (loadAs<V>(z + rim[i].at + h * L) - z0[h]);
+                rimOdd[h] += odd * (loadAs<V>(z + rim[i + 1].at + h * L) - z0[h]);
             }
         }
         if (i < rims)
             for (int h = 0; h < H; ++h)
-                rimEven[h] += MSII_BROADCAST(rim[i].weight) * (loadLanes(z + rim[i].at + h * kLanes) - z0[h]);
+                rimEven[h] += MSII_BROADCAST_AS(V, rim[i].weight) * (loadAs<V>(z + rim[i].at + h * L) - z0[h]);
         float most = 0;
         for (int h = 0; h < H; ++h)
-            for (int l = 0; l < kLanes; ++l) most = std::max(most, reach[h][l]);
+            for (int l = 0; l < L; ++l) most = std::max(most, reach[h][l]);
         const std::size_t n = disc.pieces.size();
         const DiscPlan::Piece* pieces = disc.pieces.data();
-        Lanes clamps[H];
+        V clamps[H];
         for (int h = 0; h < H; ++h) clamps[h] = zero;
         for (i = 0; i < n && pieces[i].halfChord <= most; ++i) {
             const DiscPlan::Piece& p = pieces[i];
-            const Lanes hi = MSII_BROADCAST(p.halfChord), w0 = MSII_BROADCAST(p.weight[0]), w1 = MSII_BROADCAST(p.weight[1]),
-                        w2 = MSII_BROADCAST(p.weight[2]), area = MSII_BROADCAST(p.area), twice = hi + hi;
+            const V hi = MSII_BROADCAST_AS(V, p.halfChord), w0 = MSII_BROADCAST_AS(V, p.weight[0]),
+                    w1 = MSII_BROADCAST_AS(V, p.weight[1]), w2 = MSII_BROADCAST_AS(V, p.weight[2]),
+                    area = MSII_BROADCAST_AS(V, p.area), twice = hi + hi;
             for (int h = 0; h < H; ++h) {
-                const Lanes below = w0 * loadLanes(z + p.at[0] + h * kLanes) + w1 * loadLanes(z + p.at[1] + h * kLanes) +
-                                    w2 * loadLanes(z + p.at[2] + h * kLanes) - z0[h] + hi;
-                const Lanes clamped = minLanes(maxLanes(below, zero), twice) - below;
-                clamps[h] += Lanes(LaneMask(area * clamped) & LaneMask(hi <= reach[h]));
+                const V below = w0 * loadAs<V>(z + p.at[0] + h * L) + w1 * loadAs<V>(z + p.at[1] + h * L) +
+                                w2 * loadAs<V>(z + p.at[2] + h * L) - z0[h] + hi;
+                const V clamped = minOf(maxOf(below, zero), twice) - below;
+                const V add = area * clamped;
+                clamps[h] += (hi <= reach[h]) ? add : zero;
             }
         }
+        // Per eight lanes, in double.
+        float rimSum[W], clampSum[W];
         for (int h = 0; h < H; ++h) {
-            LaneInts core;
-            std::memcpy(&core, &coreLeft[h], sizeof coreLeft[h]);
-            std::memcpy(reinterpret_cast<char*>(&core) + sizeof coreLeft[h], &coreRight[h], sizeof coreRight[h]);
-            const LaneDoubles coreSum =
-                __builtin_convertvector(core, LaneDoubles) * (1 / kHeightScale) - disc.coreCount * z0wide[h];
+            const V r = rimEven[h] + rimOdd[h];
+            std::memcpy(rimSum + h * L, &r, sizeof r);
+            std::memcpy(clampSum + h * L, &clamps[h], sizeof clamps[h]);
+        }
+        for (int e = 0; e < W / kLanes; ++e) {
+            LaneInts coreInts;
+            std::memcpy(&coreInts, &core[2 * e], sizeof core[2 * e]);
+            std::memcpy(reinterpret_cast<char*>(&coreInts) + sizeof core[2 * e], &core[2 * e + 1], sizeof core[2 * e + 1]);
+            const LaneDoubles z0wide = __builtin_convertvector(loadLanes(z0lanes + e * kLanes), LaneDoubles);
+            const LaneDoubles coreSum = __builtin_convertvector(coreInts, LaneDoubles) * (1 / kHeightScale) - disc.coreCount * z0wide;
             const LaneDoubles total = double(plans.coreWeight) * coreSum +
-                                      __builtin_convertvector(rimEven[h] + rimOdd[h], LaneDoubles) +
-                                      __builtin_convertvector(clamps[h], LaneDoubles);
-            std::memcpy(sums + k * W + h * kLanes, &total, sizeof total);
+                                      __builtin_convertvector(loadLanes(rimSum + e * kLanes), LaneDoubles) +
+                                      __builtin_convertvector(loadLanes(clampSum + e * kLanes), LaneDoubles);
+            std::memcpy(sums + k * W + e * kLanes, &total, sizeof total);
         }
     }
 }
 
+/// sumDiscsOf for kLanes cells. Compiled for AVX2 as well (chosen at run time).
 __attribute__((target_clones("avx2", "default"))) void sumDiscs(const DiscGrid& g, const DiscPlans& plans,
                                                                const float* z0lanes, std::size_t count, double* sums)
 {
-    sumDiscsOf<1>(g, plans, z0lanes, count, sums);
+    sumDiscsOf<1, Lanes>(g, plans, z0lanes, count, sums);
 }
 
-/// sumDiscs for two blocks of kLanes side by side (2 · kLanes lanes).
-__attribute__((target_clones("avx2", "default"))) void sumDiscsTwice(const DiscGrid& g, const DiscPlans& plans,
-                                                                    const float* z0lanes, std::size_t count, double* sums)
+/// sumDiscsOf for kWide cells: two vectors of eight (AVX2 and the default) or one of sixteen
+/// (AVX-512, below).
+constexpr int kWide = 2 * kLanes;
+__attribute__((target_clones("avx2", "default"))) void sumDiscsWideOf8(const DiscGrid& g, const DiscPlans& plans,
+                                                                      const float* z0lanes, std::size_t count, double* sums)
 {
-    sumDiscsOf<2>(g, plans, z0lanes, count, sums);
+    sumDiscsOf<2, Lanes>(g, plans, z0lanes, count, sums);
+}
+__attribute__((target("avx512f,avx512vl,avx512dq,avx512bw"))) void sumDiscsWideOf16(const DiscGrid& g,
+                                                                                   const DiscPlans& plans,
+                                                                                   const float* z0lanes,
+                                                                                   std::size_t count, double* sums)
+{
+    sumDiscsOf<1, Lanes16>(g, plans, z0lanes, count, sums);
+}
+/// The values are the same either way; AVX-512 where the processor and the system have it.
+void sumDiscsWide(const DiscGrid& g, const DiscPlans& plans, const float* z0lanes, std::size_t count, double* sums)
+{
+    static const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+                               __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw");
+    (avx512 ? sumDiscsWideOf16 : sumDiscsWideOf8)(g, plans, z0lanes, count, sums);
 }
 
 /// What one cell of the own rectangle needs: whether every cell of its largest ball has a
@@ -766,7 +811,7 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
 
     if (context) context->start("V and S from the heights", std::size_t(own.rows));
     tbb::parallel_for(tbb::blocked_range<int>(0, own.rows), [&](const tbb::blocked_range<int>& range) {
-        std::vector<double> volume(discCount * kLanes * 2), one(discCount * kLanes);
+        std::vector<double> volume(discCount * kWide), one(discCount * kLanes);
         std::size_t complete[kLanes];  // per lane: the discs, in the nested order, it has every height of
         // The values of lanes [0, lanes) of the block at own column c from its sums (@p width per disc).
         const auto store = [&](int r, int c, int lanes, std::size_t width, const std::size_t* completeOf) {
@@ -797,20 +842,19 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
             return col - reach >= 0 && last + reach < grid.cols && row - reach >= 0 && row + reach < grid.rows &&
                    coverage.complete(col, last, row, reach, grid.rows);
         };
-        const std::size_t whole[2 * kLanes] = {discCount, discCount, discCount, discCount, discCount, discCount,
-                                               discCount, discCount, discCount, discCount, discCount, discCount,
-                                               discCount, discCount, discCount, discCount};
+        std::size_t whole[kWide];
+        std::fill(whole, whole + kWide, discCount);
         for (int r = range.begin(); r < range.end(); ++r) {
             const int row = own.row + r;
             for (int c = 0; c < own.cols; c += kLanes) {
-                // Most pairs of blocks have every height of their largest discs, and lie
-                // farther than R from the grid's edge: summed together.
-                if (c + 2 * kLanes <= own.cols && interior(own.col + c, own.col + c + 2 * kLanes - 1, row)) {
-                    float z0[2 * kLanes];
-                    for (int k = 0; k < 2 * kLanes; ++k) z0[k] = grid.at(own.col + c + k, row);
-                    sumDiscsTwice(gridAt(row, own.col + c), plans, z0, discCount, volume.data());
-                    store(r, c, 2 * kLanes, 2 * kLanes, whole);
-                    c += kLanes;
+                // Most runs of kWide cells have every height of their largest discs, and
+                // lie farther than R from the grid's edge: summed together.
+                if (c + kWide <= own.cols && interior(own.col + c, own.col + c + kWide - 1, row)) {
+                    float z0[kWide];
+                    for (int k = 0; k < kWide; ++k) z0[k] = grid.at(own.col + c + k, row);
+                    sumDiscsWide(gridAt(row, own.col + c), plans, z0, discCount, volume.data());
+                    store(r, c, kWide, kWide, whole);
+                    c += kWide - kLanes;
                     continue;
                 }
                 const int lanes = std::min(kLanes, own.cols - c);
