@@ -10,11 +10,14 @@
 #include <msii/mesh/prepare_mesh.h>
 #include <msii/tiling/tiled_compute.h>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <sstream>
 
@@ -480,14 +483,17 @@ std::vector<std::vector<float>> computeWindow(const Window& win, const WindowLay
 /// Computes window @p win on the height-field route: the box's gaps filled and its borders
 /// continued on the grid, V and S of its own cells from the heights, filled_share from the
 /// same hat weights at R. Adds its diagnostics, masked own cells and time to @p result;
-/// returns its bands per cell of its box (NaN outside the own cells).
+/// returns its bands per own cell (row by row).
 std::vector<std::vector<float>> computeHeightWindow(const Window& win, const WindowLayout& w, DiagnosticSum& diagnostics,
                                                     DemComputeResult& result, RunContext* context)
 {
     const int bw = win.box[2] - win.box[0], bh = win.box[3] - win.box[1];
     const float nan = std::numeric_limits<float>::quiet_NaN();
-    std::vector<std::vector<float>> cells(result.bands.size(), std::vector<float>(std::size_t(bw) * std::size_t(bh), nan));
-    if (win.dem.numValid == 0) return cells;
+    std::vector<std::vector<float>> cells(result.bands.size());
+    if (win.dem.numValid == 0) {
+        for (std::vector<float>& band : cells) band.assign(std::size_t(win.cols) * std::size_t(win.rows), nan);
+        return cells;
+    }
     Stopwatch clock;
     HeightGrid heights;
     heights.cols = bw, heights.rows = bh, heights.z = win.dem.heights;
@@ -561,12 +567,12 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
         const std::string& name = result.bands[b];
         const bool height = name == "height";  // found once per band, not per cell
         const auto p = std::find_if(props.begin(), props.end(), [&](const VertexProperty& q) { return q.name == name; });
+        cells[b].resize(nOwn);
         tbb::parallel_for(0, win.rows, [&](int y) {
             for (int x = 0; x < win.cols; ++x) {
-                const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x),
-                                  at = win.boxCell(win.col + x, win.row + y);
+                const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x);
                 // Not on the surface: nodata in every band but the height.
-                cells[b][at] = height ? win.dem.heights[at] : !onSurface[k] ? nan : p->values[k];
+                cells[b][k] = height ? win.dem.heights[win.boxCell(win.col + x, win.row + y)] : !onSurface[k] ? nan : p->values[k];
             }
         });
     }
@@ -642,7 +648,7 @@ public:
         if (mContext && !label.empty()) mContext->setPrefix(label + ": ");
         if (mW.oneWindow && win.dem.numValid == 0)
             throw InvalidInputError(fileName(mInput) + " has no cell with a height (all nodata)");
-        std::vector<std::vector<float>> cells;
+        std::vector<std::vector<float>> cells;  // per cell of the box (the mesh route) or own cell (heights)
         try {
             cells = mW.heightField ? computeHeightWindow(win, mW, totals.diagnostics, mResult, mContext)
                                    : computeWindow(win, mW, totals.diagnostics, mResult, mContext);
@@ -667,13 +673,22 @@ public:
                                     ": no 2 x 2 block of cells has heights, so there is no surface to compute on");
         mResult.wideHaloWindows += win.wide;
         stage.restart();
-        for (int y = win.row; y < win.row + win.rows; ++y)
-            for (int x = win.col; x < win.col + win.cols; ++x) {
-                const std::size_t c = win.boxCell(x, y);
-                totals.ownCellsWithHeight += !std::isnan(win.dem.heights[c]);
-                win.dem.undeclared.count(c, totals.undeclared);
-            }
-        writeOwnCells(win, mW.region, cells, mWriter);
+        totals.ownCellsWithHeight += tbb::parallel_reduce(
+            tbb::blocked_range<int>(win.row, win.row + win.rows), std::size_t(0),
+            [&](const tbb::blocked_range<int>& rows, std::size_t n) {
+                for (int y = rows.begin(); y < rows.end(); ++y)
+                    for (int x = win.col; x < win.col + win.cols; ++x) n += !std::isnan(win.dem.heights[win.boxCell(x, y)]);
+                return n;
+            },
+            std::plus<std::size_t>());
+        if (!win.dem.undeclared.empty())
+            for (int y = win.row; y < win.row + win.rows; ++y)
+                for (int x = win.col; x < win.col + win.cols; ++x) win.dem.undeclared.count(win.boxCell(x, y), totals.undeclared);
+        if (mW.heightField)
+            for (std::size_t b = 0; b < cells.size(); ++b)
+                mWriter.write(int(b), win.col - mW.region.col, win.row - mW.region.row, win.cols, win.rows, cells[b].data());
+        else
+            writeOwnCells(win, mW.region, cells, mWriter);
         mResult.writeSeconds += stage.seconds();
     }
 
