@@ -419,7 +419,7 @@ inline EdgePiece edgePiece(double ax, double ay, double az, double bx, double by
 /// summed half-angle exceeds 1/4 (c inside the triangle, or the triangle near c), or c lies
 /// close to an edge's line (exact.cpp, Straddler::precise), done is 0 and clipOne takes
 /// the clip instead. Compiled for AVX2 as well, chosen at run time, with the same results.
-__attribute__((target_clones("avx2", "default"))) void clipBatch(ClipBatch& b)
+__attribute__((target_clones("avx512f", "avx2", "default"))) void clipBatch(ClipBatch& b)
 {
     for (std::size_t j = 0; j < b.size; ++j) {
         const double ax = b.x[0][j], ay = b.y[0][j], az = b.z[0][j];

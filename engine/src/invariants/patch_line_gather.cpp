@@ -26,7 +26,7 @@ namespace {
 /// sample's normal tensor t and q = ûᵀCû from its covariance C (tensors xx, yy, zz, xy, xz,
 /// yz). Plain loops over floats, compiled for AVX2 as well (chosen at run time; same
 /// results).
-__attribute__((target_clones("avx2", "default"))) void binSamples(
+__attribute__((target_clones("avx512f", "avx2", "default"))) void binSamples(
     std::size_t n, const float* __restrict x, const float* __restrict y, const float* __restrict z,
     const float* __restrict area, const float* __restrict txx, const float* __restrict tyy,
     const float* __restrict tzz, const float* __restrict txy, const float* __restrict txz,
