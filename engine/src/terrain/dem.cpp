@@ -7,11 +7,16 @@
 #include <cpl_error.h>
 #include <cpl_string.h>
 #include <ogr_spatialref.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <iomanip>
 #include <sstream>
 #include <memory>
@@ -255,12 +260,30 @@ Dem DemSource::read(int col0, int row0, int cols, int rows) const
     GDALRasterBand* band = mImpl->dataset->GetRasterBand(mInfo.band);
     const double scale = band->GetScale(&hasScale), offset = band->GetOffset(&hasOffset);
     const bool scaled = (hasScale && scale != 1.0) || (hasOffset && offset != 0.0);
-    for (float& h : dem.heights) {
-        if (!std::isfinite(h) || (mImpl->hasNodata && h == nodata)) h = nan;
-        else if (scaled) h = float(double(h) * scale + offset);
-    }
-    dem.undeclared = implausibleHeightsToNaN(dem.heights, g.metresPerUnit);
-    for (float h : dem.heights) dem.numValid += !std::isnan(h);
+    // In parallel (a window has millions of cells): nodata to NaN, scaling, and whether any
+    // height is implausible (rare: those are then taken one by one, in the cells' order).
+    const bool hasNodata = mImpl->hasNodata;
+    const double metresPerUnit = g.metresPerUnit;
+    std::atomic<bool> implausible{false};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, dem.heights.size(), 1 << 16),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                          bool seen = false;
+                          for (std::size_t c = range.begin(); c < range.end(); ++c) {
+                              float& h = dem.heights[c];
+                              if (!std::isfinite(h) || (hasNodata && h == nodata)) h = nan;
+                              else if (scaled) h = float(double(h) * scale + offset);
+                              seen = seen || (!std::isnan(h) && isImplausibleHeight(h, metresPerUnit));
+                          }
+                          if (seen) implausible = true;
+                      });
+    if (implausible) dem.undeclared = implausibleHeightsToNaN(dem.heights, metresPerUnit);
+    dem.numValid = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, dem.heights.size(), 1 << 16), std::size_t(0),
+        [&](const tbb::blocked_range<std::size_t>& range, std::size_t n) {
+            for (std::size_t c = range.begin(); c < range.end(); ++c) n += !std::isnan(dem.heights[c]);
+            return n;
+        },
+        std::plus<std::size_t>());
     return dem;
 }
 

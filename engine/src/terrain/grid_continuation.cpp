@@ -41,10 +41,11 @@ void fillGaps(Grid& g, double cw, double ch, double maxPerimeter, GridContinuati
     if (sc < 1 || sr < 1) return;
     const auto square = [&](int c, int r) { return std::size_t(r) * std::size_t(sc) + std::size_t(c); };
     std::vector<char> missing(std::size_t(sc) * std::size_t(sr), 0), seen(missing.size(), 0);
-    for (int r = 0; r < sr; ++r)
+    tbb::parallel_for(0, sr, [&](int r) {
         for (int c = 0; c < sc; ++c)
             missing[square(c, r)] = std::isnan(g.z[g.at(c, r)]) || std::isnan(g.z[g.at(c + 1, r)]) ||
                                     std::isnan(g.z[g.at(c, r + 1)]) || std::isnan(g.z[g.at(c + 1, r + 1)]);
+    });
     std::vector<std::size_t> squares, stack, gap;
     for (std::size_t start = 0; start < missing.size(); ++start) {
         if (!missing[start] || seen[start]) continue;
@@ -277,12 +278,13 @@ GridContinuationResult continueGrid(const HeightGrid& heights, const GridContinu
     out.cols = heights.cols + 2 * m, out.rows = heights.rows + 2 * m;
     out.z.assign(std::size_t(out.cols) * std::size_t(out.rows), kNaN);
     result.kind.assign(out.z.size(), GridCell::None);
-    for (int r = 0; r < heights.rows; ++r)
+    tbb::parallel_for(0, heights.rows, [&](int r) {
         for (int c = 0; c < heights.cols; ++c) {
             const std::size_t i = std::size_t(r + m) * std::size_t(out.cols) + std::size_t(c + m);
             out.z[i] = heights.at(c, r);
             if (!std::isnan(out.z[i])) result.kind[i] = GridCell::Height;
         }
+    });
     Grid g{out.cols, out.rows, out.z, result.kind};
     // Holes that reach the input's edge are open there: they reach the margin's squares.
     if (options.maxHolePerimeter > 0) fillGaps(g, options.cellWidth, options.cellHeight, options.maxHolePerimeter, result);
