@@ -51,6 +51,12 @@ TEST(MaskedValues, CountsTheFirstInvariantOverTheRowsGiven)
     EXPECT_EQ(some.vertices, 3u);
     EXPECT_EQ(some.withFilledShare, 1u);
     EXPECT_EQ(some.perRadius, (std::vector<std::size_t>{1, 2}));
+    MaskedValues where;  // the same rows by a mask
+    where.addWhere(f, share, {1, 0, 1, 1});
+    where.addWhere(f, share, {0, 0, 0, 0});
+    EXPECT_EQ(where.vertices, 3u);
+    EXPECT_EQ(where.withFilledShare, 1u);
+    EXPECT_EQ(where.perRadius, (std::vector<std::size_t>{1, 2}));
     f[Invariant::Volume] = {{0.5f, 0.5f, 0.5f, 0.5f}, {0.5f, 0.5f, 0.5f, nan}};  // V whenever computed
     MaskedValues withV;
     withV.add(f, share);

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <functional>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 
 namespace msii {
@@ -32,28 +33,49 @@ void MaskedValues::add(const FeatureSet& features, const std::vector<float>& fil
     vertices += features.numVertices();
 }
 
-void MaskedValues::add(const FeatureSet& features, const std::vector<float>& filledShare,
-                       const std::vector<std::uint32_t>& rows)
+namespace {
+
+/// rowOf's "no row".
+constexpr std::size_t kNoRow = std::numeric_limits<std::size_t>::max();
+
+/// Adds to @p m the rows of @p features and @p filledShare that @p rowOf gives for k in
+/// [0, n) (none where it gives kNoRow), in parallel: a DEM's window has millions of cells,
+/// and counts add up alike in any order.
+template <class RowOf>
+void addRows(MaskedValues& m, const FeatureSet& features, const std::vector<float>& filledShare, std::size_t n,
+             RowOf rowOf)
 {
-    // Counted in parallel (a DEM's window has millions of cells); counts add up alike in
-    // any order.
     const auto count = [&](auto&& counts) {
         return tbb::parallel_reduce(
-            tbb::blocked_range<std::size_t>(0, rows.size(), 1 << 16), std::size_t(0),
-            [&](const tbb::blocked_range<std::size_t>& range, std::size_t n) {
-                for (std::size_t k = range.begin(); k < range.end(); ++k) n += counts(rows[k]);
-                return n;
+            tbb::blocked_range<std::size_t>(0, n, 1 << 16), std::size_t(0),
+            [&](const tbb::blocked_range<std::size_t>& range, std::size_t sum) {
+                for (std::size_t k = range.begin(); k < range.end(); ++k)
+                    if (const std::size_t i = rowOf(k); i != kNoRow) sum += counts(i);
+                return sum;
             },
             std::plus<std::size_t>());
     };
-    withFilledShare += count([&](std::uint32_t i) { return filledShare[i] > 0; });
+    m.withFilledShare += count([&](std::size_t i) { return filledShare[i] > 0; });
     const FeatureColumns* columns = countedColumns(features);
     if (!columns) return;
-    perRadius.resize(columns->size(), 0);
+    m.perRadius.resize(columns->size(), 0);
     for (std::size_t j = 0; j < columns->size(); ++j)
         if (!(*columns)[j].empty())  // a radius not computed (a DEM's bands need a few)
-            perRadius[j] += count([&](std::uint32_t i) { return std::isnan((*columns)[j][i]); });
-    vertices += rows.size();
+            m.perRadius[j] += count([&](std::size_t i) { return std::isnan((*columns)[j][i]); });
+    m.vertices += count([](std::size_t) { return true; });
+}
+
+} // namespace
+
+void MaskedValues::add(const FeatureSet& features, const std::vector<float>& filledShare,
+                       const std::vector<std::uint32_t>& rows)
+{
+    addRows(*this, features, filledShare, rows.size(), [&](std::size_t k) { return std::size_t(rows[k]); });
+}
+
+void MaskedValues::addWhere(const FeatureSet& features, const std::vector<float>& filledShare, const std::vector<char>& counted)
+{
+    addRows(*this, features, filledShare, counted.size(), [&](std::size_t k) { return counted[k] ? k : kNoRow; });
 }
 
 std::size_t MaskedValues::total() const

@@ -547,10 +547,6 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
             filledShare[k] = float(std::min(1.0, share / discArea));
         }
     });
-    std::vector<std::uint32_t> inFace;
-    inFace.reserve(nOwn);
-    for (std::size_t k = 0; k < nOwn; ++k)
-        if (onSurface[k]) inFace.push_back(std::uint32_t(k));
     std::size_t squares = 0;
     for (const std::size_t n : squaresOfRow) squares += n;
     result.triangles += 2 * squares;
@@ -561,18 +557,24 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
     // (moved, not copied: a window's columns are tens of MB each)
     if (!hf.volume.empty()) features[Invariant::Volume] = std::move(hf.volume);
     if (!hf.sphere.empty()) features[Invariant::Sphere] = std::move(hf.sphere);
-    result.masked.add(features, filledShare, inFace);
+    result.masked.addWhere(features, filledShare, onSurface);
     std::vector<VertexProperty> props = outputProperties(std::move(features), std::move(filledShare));
     for (std::size_t b = 0; b < result.bands.size(); ++b) {
         const std::string& name = result.bands[b];
         const bool height = name == "height";  // found once per band, not per cell
         const auto p = std::find_if(props.begin(), props.end(), [&](const VertexProperty& q) { return q.name == name; });
-        cells[b].resize(nOwn);
+        // A property's values per own cell become its band (moved where no later band names
+        // it again), nodata where not on the surface.
+        const bool again = std::find(result.bands.begin() + std::ptrdiff_t(b) + 1, result.bands.end(), name) != result.bands.end();
+        if (!height && !again) cells[b] = std::move(p->values);
+        else if (!height) cells[b] = p->values;
+        else cells[b].resize(nOwn);
         tbb::parallel_for(0, win.rows, [&](int y) {
             for (int x = 0; x < win.cols; ++x) {
                 const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x);
                 // Not on the surface: nodata in every band but the height.
-                cells[b][k] = height ? win.dem.heights[win.boxCell(win.col + x, win.row + y)] : !onSurface[k] ? nan : p->values[k];
+                if (height) cells[b][k] = win.dem.heights[win.boxCell(win.col + x, win.row + y)];
+                else if (!onSurface[k]) cells[b][k] = nan;
             }
         });
     }

@@ -29,6 +29,8 @@ struct MaskedValues {
     void add(const FeatureSet& features, const std::vector<float>& filledShare);
     /// Counts the rows @p rows of @p features and @p filledShare (none if empty).
     void add(const FeatureSet& features, const std::vector<float>& filledShare, const std::vector<std::uint32_t>& rows);
+    /// Counts the rows i of @p features and @p filledShare where @p counted[i] is not 0.
+    void addWhere(const FeatureSet& features, const std::vector<float>& filledShare, const std::vector<char>& counted);
     /// vertex·radius pairs masked, all radii.
     std::size_t total() const;
     /// The "mostly_masked" diagnostic when more than half of the vertices are masked at the
