@@ -418,7 +418,8 @@ inline EdgePiece edgePiece(double ax, double ay, double az, double bx, double by
 /// distance h_i = (q_i × u_i)·n from c. Branch-free, so that it vectorises: where the
 /// summed half-angle exceeds 1/4 (c inside the triangle, or the triangle near c), or c lies
 /// close to an edge's line (exact.cpp, Straddler::precise), done is 0 and clipOne takes
-/// the clip instead. Compiled for AVX2 as well, chosen at run time, with the same results.
+/// the clip instead. Compiled for AVX-512 and AVX2 as well, chosen at run time, with the
+/// same results (the file has no fused multiply-adds, which the AVX-512 variant would have).
 __attribute__((target_clones("avx512f", "avx2", "default"))) void clipBatch(ClipBatch& b)
 {
     for (std::size_t j = 0; j < b.size; ++j) {

@@ -24,8 +24,9 @@ namespace {
 /// (bin b gets 1 − share, b + 1 gets share; b = @p beyond beyond @p reach2, squared), and
 /// the channels a·(1, g, q, g·q) with the coarea factor g = sqrt(1 − mean (û·n)²) from the
 /// sample's normal tensor t and q = ûᵀCû from its covariance C (tensors xx, yy, zz, xy, xz,
-/// yz). Plain loops over floats, compiled for AVX2 as well (chosen at run time; same
-/// results).
+/// yz). Plain loops over floats, compiled for AVX-512 and AVX2 as well (chosen at run time;
+/// the same results: the file has no fused multiply-adds, which the AVX-512 variant would
+/// have).
 __attribute__((target_clones("avx512f", "avx2", "default"))) void binSamples(
     std::size_t n, const float* __restrict x, const float* __restrict y, const float* __restrict z,
     const float* __restrict area, const float* __restrict txx, const float* __restrict tyy,

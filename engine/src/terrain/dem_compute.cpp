@@ -563,6 +563,8 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
         const std::string& name = result.bands[b];
         const bool height = name == "height";  // found once per band, not per cell
         const auto p = std::find_if(props.begin(), props.end(), [&](const VertexProperty& q) { return q.name == name; });
+        if (!height && p == props.end())
+            throw InvalidInputError("the band '" + name + "' is none of the features computed (names as msii writes them, e.g. V_04)");
         // A property's values per own cell become its band (moved where no later band names
         // it again), nodata where not on the surface.
         const bool again = std::find(result.bands.begin() + std::ptrdiff_t(b) + 1, result.bands.end(), name) != result.bands.end();

@@ -199,10 +199,13 @@ void continueBorders(Grid& g, const GridContinuationOptions& o, GridContinuation
     };
     std::stable_sort(offsets.begin(), offsets.end(), [&](const auto& a, const auto& b) { return d2(a) < d2(b); });
     // Chessboard distance to the nearest height (at most m + 1), to skip cells farther than
-    // the margin: per row the distance along it, then per NaN cell the least over the rows
-    // within m of max(|dy|, that row's distance). Rows in parallel.
+    // the margin: per row the distance along it (`along`), per column the rows to the nearest
+    // row with a height within m along it (kept in `near` first), then per cell without a
+    // height the least over the rows from there on of max(|dy|, that row's distance). Rows
+    // and strips of columns in parallel; a cell deep in a nodata area costs no more than one
+    // with a height.
     const int far = m + 1;
-    std::vector<int> along(g.z.size(), far), near(g.z.size(), 0);
+    std::vector<int> along(g.z.size(), far), near(g.z.size(), far);
     tbb::parallel_for(0, g.rows, [&](int y) {
         int* d = &along[g.at(0, y)];
         const float* z = &g.z[g.at(0, y)];
@@ -215,12 +218,25 @@ void continueBorders(Grid& g, const GridContinuationOptions& o, GridContinuation
             d[x] = std::min(d[x], next - x);
         }
     });
+    constexpr int kStrip = 256;
+    tbb::parallel_for(0, (g.cols + kStrip - 1) / kStrip, [&](int strip) {
+        const int x0 = strip * kStrip, x1 = std::min(g.cols, x0 + kStrip);
+        for (int y = 0; y < g.rows; ++y)
+            for (int x = x0; x < x1; ++x)
+                near[g.at(x, y)] = along[g.at(x, y)] <= m ? 0 : y > 0 ? std::min(far, near[g.at(x, y - 1)] + 1) : far;
+        for (int y = g.rows - 2; y >= 0; --y)
+            for (int x = x0; x < x1; ++x) near[g.at(x, y)] = std::min(near[g.at(x, y)], near[g.at(x, y + 1)] + 1);
+    });
     tbb::parallel_for(0, g.rows, [&](int y) {
         for (int x = 0; x < g.cols; ++x) {
             const std::size_t c = g.at(x, y);
-            if (along[c] == 0) continue;
+            if (along[c] == 0) {
+                near[c] = 0;
+                continue;
+            }
+            // Rows nearer than near[c] have no height within m along them: no better there.
             int d = along[c];
-            for (int dy = 1; dy <= m && dy < d; ++dy) {
+            for (int dy = std::max(1, near[c]); dy <= m && dy < d; ++dy) {
                 if (y - dy >= 0) d = std::min(d, std::max(dy, along[g.at(x, y - dy)]));
                 if (y + dy < g.rows) d = std::min(d, std::max(dy, along[g.at(x, y + dy)]));
             }

@@ -309,7 +309,6 @@ constexpr int kLanes = 8;
 /// Eight floats, one per lane (GCC's vector extension: AVX2 registers in the AVX2 clone, two
 /// SSE registers in the default one).
 typedef float Lanes __attribute__((vector_size(32)));
-typedef int LaneMask __attribute__((vector_size(32)));
 static_assert(kLanes == 8, "Lanes holds eight cells");
 
 // The helpers return vectors in registers: always inlined, in both clones, so the ABI of a
@@ -321,12 +320,6 @@ MSII_LANES Lanes loadLanes(const float* p)
     std::memcpy(&v, p, sizeof v);
     return v;
 }
-/// A float in every lane. A macro, not a helper: GCC 12 lowers a helper's eight-float
-/// vector for the default target before inlining it into the AVX2 clone, and the AVX2 code
-/// then builds it lane by lane (eight inserts) instead of one vbroadcastss.
-#define MSII_BROADCAST(x) (float(x) - Lanes{})
-MSII_LANES Lanes maxLanes(Lanes a, Lanes b) { return a > b ? a : b; }
-MSII_LANES Lanes minLanes(Lanes a, Lanes b) { return a < b ? a : b; }
 
 /// discSamples at radius @p r, kept for the next call with the same disc: a DEM's windows
 /// all ask for the same few (their quadratures take longer than a window's bands do).
@@ -519,7 +512,9 @@ MSII_LANES V minOf(V a, V b)
 {
     return a < b ? a : b;
 }
-/// A float in every lane of a V (a macro for the reason of MSII_BROADCAST).
+/// A float in every lane of a V. A macro, not a helper: GCC 12 lowers a helper's vector for
+/// the default target before inlining it into the AVX2 clone, and the AVX2 code then builds
+/// it lane by lane (eight inserts) instead of one vbroadcastss.
 #define MSII_BROADCAST_AS(V, x) (float(x) - V{})
 
 /// For kLanes · M consecutive cells (lane k at column offset k), M = H · (lanes of V) / kLanes,
