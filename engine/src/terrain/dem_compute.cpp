@@ -530,6 +530,37 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
     const DiscSquares disc =
         wantsShare ? discSquares(w.kernel.radii.back(), w.kernel.cellWidth, w.kernel.cellHeight) : DiscSquares();
     const double discArea = 3.14159265358979323846 * w.kernel.radii.back() * w.kernel.radii.back();
+    // The squares with a filled or continued corner counted over rectangles (a summed-area
+    // table, in 32-bit integers whose differences wrap exactly), so that a cell whose ball's
+    // bounding square has none gets 0 without its disc's squares: most cells are far from
+    // the fills and the continuation.
+    const int gc = g.grid.cols, gr = g.grid.rows;
+    std::vector<std::uint32_t> addedBelow;  // (gc + 1) × (gr + 1): squares (< c, < r) added
+    int dcLow = 0, dcHigh = -1, drLow = 0, drHigh = -1;
+    if (!disc.area.empty()) {
+        dcLow = *std::min_element(disc.column.begin(), disc.column.end());
+        dcHigh = *std::max_element(disc.column.begin(), disc.column.end());
+        drLow = *std::min_element(disc.row.begin(), disc.row.end());
+        drHigh = *std::max_element(disc.row.begin(), disc.row.end());
+        addedBelow.assign(std::size_t(gc + 1) * std::size_t(gr + 1), 0);
+        tbb::parallel_for(0, gr, [&](int r) {
+            std::uint32_t running = 0;
+            std::uint32_t* out = &addedBelow[std::size_t(r + 1) * std::size_t(gc + 1)];
+            for (int c = 0; c < gc; ++c) out[c + 1] = running += added(c, r) ? 1u : 0u;
+        });
+        for (int r = 1; r <= gr; ++r) {
+            std::uint32_t* out = &addedBelow[std::size_t(r) * std::size_t(gc + 1)];
+            const std::uint32_t* above = out - (gc + 1);
+            for (int c = 0; c <= gc; ++c) out[c] += above[c];
+        }
+    }
+    const auto anyAdded = [&](int c, int r) {
+        const int c0 = std::max(0, c + dcLow), c1 = std::min(gc, c + dcHigh + 1), r0 = std::max(0, r + drLow),
+                  r1 = std::min(gr, r + drHigh + 1);
+        if (c0 >= c1 || r0 >= r1) return false;
+        const auto at = [&](int x, int y) { return addedBelow[std::size_t(y) * std::size_t(gc + 1) + std::size_t(x)]; };
+        return at(c1, r1) - at(c0, r1) - at(c1, r0) + at(c0, r0) != 0;
+    };
     // Row by row in parallel: the squares with four heights, and the cells in a face.
     std::vector<std::size_t> squaresOfRow(std::size_t(win.rows), 0);
     std::vector<char> onSurface(nOwn, 0);
@@ -542,8 +573,9 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
             const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x);
             onSurface[k] = 1;
             double share = 0;
-            for (std::size_t i = 0; i < disc.area.size(); ++i)
-                if (added(c + disc.column[i], r + disc.row[i])) share += disc.area[i];
+            if (!disc.area.empty() && anyAdded(c, r))
+                for (std::size_t i = 0; i < disc.area.size(); ++i)
+                    if (added(c + disc.column[i], r + disc.row[i])) share += disc.area[i];
             filledShare[k] = float(std::min(1.0, share / discArea));
         }
     });
