@@ -197,8 +197,12 @@ TEST(HeightField, EveryBlockAgreesWithTheCellAlone)
                     const float v = block.volume[j][at], s = block.sphere[j][at];
                     ASSERT_EQ(std::isnan(v), std::isnan(alone.volume[j][0])) << own.col + c << ", " << own.row + r;
                     ASSERT_EQ(std::isnan(s), std::isnan(alone.sphere[j][0])) << own.col + c << ", " << own.row + r;
-                    if (!std::isnan(v)) ASSERT_EQ(v, alone.volume[j][0]) << own.col + c << ", " << own.row + r << ", r " << ho.radii[j];
-                    if (!std::isnan(s)) ASSERT_EQ(s, alone.sphere[j][0]) << own.col + c << ", " << own.row + r << ", r " << ho.radii[j];
+                    if (!std::isnan(v)) {
+                        ASSERT_EQ(v, alone.volume[j][0]) << own.col + c << ", " << own.row + r << ", r " << ho.radii[j];
+                    }
+                    if (!std::isnan(s)) {
+                        ASSERT_EQ(s, alone.sphere[j][0]) << own.col + c << ", " << own.row + r << ", r " << ho.radii[j];
+                    }
                     valued += !std::isnan(v);
                     ++compared;
                 }
