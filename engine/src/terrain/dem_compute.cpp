@@ -561,15 +561,32 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
         const auto at = [&](int x, int y) { return addedBelow[std::size_t(y) * std::size_t(gc + 1) + std::size_t(x)]; };
         return at(c1, r1) - at(c0, r1) - at(c1, r0) + at(c0, r0) != 0;
     };
-    // Row by row in parallel: the squares with four heights, and the cells in a face.
+    // Row by row in parallel: the squares with four heights (from the own cells' row and
+    // column before them on), then the cells in a face.
+    const std::size_t sc = std::size_t(win.cols) + 1;
+    std::vector<char> givenSquare(sc * (std::size_t(win.rows) + 1));
+    tbb::parallel_for(0, win.rows + 1, [&](int y) {
+        const int r = own.row - 1 + y;
+        char* out = &givenSquare[std::size_t(y) * sc];
+        if (r < 0 || r + 1 >= gr || own.col < 1 || own.col + win.cols >= gc) {
+            for (std::size_t x = 0; x < sc; ++x) out[x] = given(own.col - 1 + int(x), r);
+            return;
+        }
+        const GridCell* k0 = &g.kind[std::size_t(r) * std::size_t(gc) + std::size_t(own.col - 1)];
+        const GridCell* k1 = k0 + gc;
+        const auto h = [](GridCell k) { return k == GridCell::Height; };
+        for (std::size_t x = 0; x < sc; ++x) out[x] = h(k0[x]) && h(k0[x + 1]) && h(k1[x]) && h(k1[x + 1]);
+    });
     std::vector<std::size_t> squaresOfRow(std::size_t(win.rows), 0);
     std::vector<char> onSurface(nOwn, 0);
     tbb::parallel_for(0, win.rows, [&](int y) {
+        const char* above = &givenSquare[std::size_t(y) * sc];
+        const char* here = above + sc;
         for (int x = 0; x < win.cols; ++x) {
             const int c = own.col + x, r = own.row + y;
             if (kindAt(c, r) != GridCell::Height) continue;
-            squaresOfRow[std::size_t(y)] += given(c, r);
-            if (!given(c, r) && !given(c - 1, r) && !given(c, r - 1) && !given(c - 1, r - 1)) continue;
+            squaresOfRow[std::size_t(y)] += here[x + 1];
+            if (!here[x + 1] && !here[x] && !above[x + 1] && !above[x]) continue;
             const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x);
             onSurface[k] = 1;
             double share = 0;
