@@ -35,13 +35,15 @@ std::vector<VertexProperty> propertiesOf(const FeatureSet& features, FeatureSet*
         const std::size_t nv = features.numVertices();
         VertexProperty value{"quality", std::vector<float>(nv, qualityStandIn(features))};
         VertexProperty count{"valid_radii", std::vector<float>(nv, 0.0f), /*integer=*/true};
+        // The columns computed, largest radius first (a DEM's default bands compute four of N).
+        std::vector<const float*> computed;
+        for (std::size_t j = quality->size(); j-- > 0;)
+            if (!(*quality)[j].empty()) computed.push_back((*quality)[j].data());
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const tbb::blocked_range<std::size_t>& range) {
             for (std::size_t i = range.begin(); i < range.end(); ++i) {
                 int valid = 0;
-                for (std::size_t j = quality->size(); j-- > 0;)
-                    if (!(*quality)[j].empty() && !std::isnan((*quality)[j][i])) {
-                        if (valid++ == 0) value.values[i] = (*quality)[j][i];
-                    }
+                for (const float* column : computed)
+                    if (!std::isnan(column[i]) && valid++ == 0) value.values[i] = column[i];
                 count.values[i] = float(valid);
             }
         });
