@@ -307,8 +307,8 @@ namespace {
 /// Lanes of cells computed together: consecutive cells of a row read consecutive heights.
 constexpr int kLanes = 8;
 
-/// Eight floats, one per lane (GCC's vector extension: AVX2 registers in the AVX2 clone, two
-/// SSE registers in the default one).
+/// Eight floats, one per lane (GCC's vector extension: AVX2 registers in the x86-64-v3 clone,
+/// two SSE registers in the default one).
 typedef float Lanes __attribute__((vector_size(32)));
 static_assert(kLanes == 8, "Lanes holds eight cells");
 
@@ -559,7 +559,10 @@ MSII_LANES float largestOf(Lanes16 v)
 /// The sum of each lane depends on its own cells only, and a disc's on the discs before it
 /// only, so that a cell gets the same value in every block, window and tile, whatever the
 /// lanes summed together and the number of discs summed: every lane takes the same operations
-/// in the same order (no fused multiply-add: the file is compiled with -ffp-contract=off).
+/// in the same order. Products are fused into their sums (-ffp-contract=fast) in the variants
+/// for x86-64-v3 and v4, which have FMA, and in none in the default one; a processor takes
+/// either the first two or the last (sumDiscsWide), so that its blocks and single lanes round
+/// alike.
 /// H vectors V side by side share the pieces' offsets, weights and loop.
 template <int H, class V>
 MSII_LANES void sumDiscsOf(const DiscGrid& g, const DiscPlans& plans, const float* z0lanes, std::size_t count, double* sums)
@@ -626,11 +629,11 @@ MSII_LANES void sumDiscsOf(const DiscGrid& g, const DiscPlans& plans, const floa
                 const DiscPlan::Piece& p = pieces[i];
                 const V hi = MSII_BROADCAST_AS(V, p.halfChord), w0 = MSII_BROADCAST_AS(V, p.weight[0]),
                         w1 = MSII_BROADCAST_AS(V, p.weight[1]), w2 = MSII_BROADCAST_AS(V, p.weight[2]),
-                        area = MSII_BROADCAST_AS(V, p.area), twice = hi + hi;
+                        area = MSII_BROADCAST_AS(V, p.area), lowest = MSII_BROADCAST_AS(V, -p.halfChord);
                 for (int h = 0; h < H; ++h) {
-                    const V below = w0 * loadAs<V>(z + p.at[0] + h * L) + w1 * loadAs<V>(z + p.at[1] + h * L) +
-                                    w2 * loadAs<V>(z + p.at[2] + h * L) - z0[h] + hi;
-                    const V clamped = minOf(maxOf(below, zero), twice) - below;
+                    const V e = w0 * loadAs<V>(z + p.at[0] + h * L) + w1 * loadAs<V>(z + p.at[1] + h * L) +
+                                w2 * loadAs<V>(z + p.at[2] + h * L) - z0[h];
+                    const V clamped = minOf(maxOf(e, lowest), hi) - e;
                     const V add = area * clamped;
                     clamps[h] += (hi <= reach[h]) ? add : zero;
                 }
@@ -657,34 +660,37 @@ MSII_LANES void sumDiscsOf(const DiscGrid& g, const DiscPlans& plans, const floa
     }
 }
 
-/// sumDiscsOf for kLanes cells. Compiled for AVX2 as well (chosen at run time).
-__attribute__((target_clones("avx2", "default"))) void sumDiscs(const DiscGrid& g, const DiscPlans& plans,
-                                                               const float* z0lanes, std::size_t count, double* sums)
+/// sumDiscsOf for kLanes cells. Compiled for x86-64-v3 (AVX2 and FMA) as well, chosen at run
+/// time.
+__attribute__((target_clones("arch=x86-64-v3", "default"))) void sumDiscs(const DiscGrid& g, const DiscPlans& plans,
+                                                                         const float* z0lanes, std::size_t count,
+                                                                         double* sums)
 {
     sumDiscsOf<1, Lanes>(g, plans, z0lanes, count, sums);
 }
 
-/// sumDiscsOf for kWide cells: two vectors of eight (AVX2 and the default) or one of sixteen
-/// (AVX-512, below).
+/// sumDiscsOf for kWide cells: two vectors of eight (x86-64-v3 and the default) or one of
+/// sixteen (x86-64-v4, AVX-512, below).
 constexpr int kWide = 2 * kLanes;
-__attribute__((target_clones("avx2", "default"))) void sumDiscsWideOf8(const DiscGrid& g, const DiscPlans& plans,
-                                                                      const float* z0lanes, std::size_t count, double* sums)
+__attribute__((target_clones("arch=x86-64-v3", "default"))) void sumDiscsWideOf8(const DiscGrid& g,
+                                                                                const DiscPlans& plans,
+                                                                                const float* z0lanes,
+                                                                                std::size_t count, double* sums)
 {
     sumDiscsOf<2, Lanes>(g, plans, z0lanes, count, sums);
 }
-__attribute__((target("avx512f,avx512vl,avx512dq,avx512bw"))) void sumDiscsWideOf16(const DiscGrid& g,
-                                                                                   const DiscPlans& plans,
-                                                                                   const float* z0lanes,
-                                                                                   std::size_t count, double* sums)
+__attribute__((target("arch=x86-64-v4"))) void sumDiscsWideOf16(const DiscGrid& g, const DiscPlans& plans,
+                                                                const float* z0lanes, std::size_t count, double* sums)
 {
     sumDiscsOf<1, Lanes16>(g, plans, z0lanes, count, sums);
 }
-/// The values are the same either way; AVX-512 where the processor and the system have it.
+/// The values are the same either way; AVX-512 where the processor and the system have it. A
+/// processor of x86-64-v4 has v3 too, so that sumDiscs takes its v3 clone there, with FMA as
+/// here.
 void sumDiscsWide(const DiscGrid& g, const DiscPlans& plans, const float* z0lanes, std::size_t count, double* sums)
 {
-    static const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
-                               __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw");
-    (avx512 ? sumDiscsWideOf16 : sumDiscsWideOf8)(g, plans, z0lanes, count, sums);
+    static const bool v4 = __builtin_cpu_supports("x86-64-v4");
+    (v4 ? sumDiscsWideOf16 : sumDiscsWideOf8)(g, plans, z0lanes, count, sums);
 }
 
 /// What one cell of the own rectangle needs: whether every cell of its largest ball has a
