@@ -175,10 +175,11 @@ TEST(HeightField, RoughTerrainAgainstTheExactMode)
     }
 }
 
-TEST(HeightField, EveryBlockAgreesWithTheCellAlone)
+/// Cells are summed 16, 8 or 1 at a time, as the own rectangle's width, the grid's edge and
+/// gaps allow: each way gives the cell's values bit for bit, with blocks of 16 in vectors of
+/// @p vectorLanes (0: the processor's widest).
+void expectEveryBlockAgreesWithTheCellAlone(int vectorLanes)
 {
-    // Cells are summed 16, 8 or 1 at a time, as the own rectangle's width, the grid's edge
-    // and gaps allow: each way gives the cell's values bit for bit.
     const Dem dem = makeDem(80, 1.0, 0.15, 11, steepTerrain);
     HeightGrid grid = gridOf(dem);
     for (int r = 30; r < 34; ++r)
@@ -186,6 +187,7 @@ TEST(HeightField, EveryBlockAgreesWithTheCellAlone)
     HeightFieldOptions ho;
     ho.radii = radiiUpTo(6.0, 4);
     ho.cellWidth = ho.cellHeight = 1.0;
+    ho.vectorLanes = vectorLanes;
     std::size_t compared = 0, valued = 0;
     for (const GridRect own : {GridRect{0, 0, 80, 80}, GridRect{7, 9, 41, 30}, GridRect{13, 21, 17, 5}, GridRect{3, 40, 9, 3}}) {
         const HeightFieldResult block = computeHeightField(grid, own, ho);
@@ -210,4 +212,16 @@ TEST(HeightField, EveryBlockAgreesWithTheCellAlone)
     }
     EXPECT_GT(compared, 10000u);
     EXPECT_GT(valued, compared / 2);  // most cells have their balls' heights
+}
+
+TEST(HeightField, EveryBlockAgreesWithTheCellAlone)
+{
+    expectEveryBlockAgreesWithTheCellAlone(0);
+}
+
+// A processor without AVX-512 sums blocks of 16 as two vectors of 8; on one with it, this
+// compares those with its single lanes too.
+TEST(HeightField, EveryBlockOfTwoVectorsAgreesWithTheCellAlone)
+{
+    expectEveryBlockAgreesWithTheCellAlone(8);
 }

@@ -17,7 +17,6 @@
 #include <memory>
 #include <mutex>
 #include <optional>
-#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -239,6 +238,7 @@ DiscSamples discSamples(double r, double cellWidth, double cellHeight, int split
         float area, meanHalfChord;
         int col[3], row[3];
         float w[3];
+        int sector;
     };
     std::vector<Piece> pieces;
     const double r2 = r * r, pw = cellWidth / split, ph = cellHeight / split;
@@ -249,6 +249,8 @@ DiscSamples discSamples(double r, double cellWidth, double cellHeight, int split
         if (!(total.length > 1e-12 * pw * ph)) return;
         Piece piece;
         piece.area = float(total.length);
+        const double turn = (std::atan2(py * cellHeight, px * cellWidth) + kPi) / (2 * kPi);
+        piece.sector = std::clamp(int(turn * kHeightFieldSectors), 0, kHeightFieldSectors - 1);
         piece.meanHalfChord = float(total.integral / total.length);
         // The DEM's triangle under the piece's centre: corners (c, r), (c + 1, r), (c, r + 1)
         // where u + v <= 1, else (c + 1, r + 1), (c + 1, r), (c, r + 1).
@@ -287,17 +289,32 @@ DiscSamples discSamples(double r, double cellWidth, double cellHeight, int split
                                 dx - 0.5 + (2 * a + i + 0.5) / split, dy - 0.5 + (2 * b + j + 0.5) / split);
                 }
         }
-    std::stable_sort(pieces.begin(), pieces.end(),
-                     [](const Piece& p, const Piece& q) { return p.meanHalfChord < q.meanHalfChord; });
-    for (const Piece& piece : pieces) {
+    std::stable_sort(pieces.begin(), pieces.end(), [](const Piece& p, const Piece& q) {
+        return p.sector != q.sector ? p.sector < q.sector : p.meanHalfChord < q.meanHalfChord;
+    });
+    // A square of 2 × 2 cells from (column, row), moved inside the reach.
+    const int side = 2 * reach + 1;
+    const auto lattice = [&](int v) { return std::clamp(2 * int(std::floor(0.5 * v)), -reach, reach - 1); };
+    std::vector<char> named(std::size_t(side) * std::size_t(side));
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+        const Piece& piece = pieces[i];
         disc.area.push_back(piece.area);
         disc.meanHalfChord.push_back(piece.meanHalfChord);
         for (std::size_t t = 0; t < 3; ++t) {
             disc.tapColumn[t].push_back(piece.col[t]);
             disc.tapRow[t].push_back(piece.row[t]);
             disc.tapWeight[t].push_back(piece.w[t]);
+            const int c = lattice(piece.col[t]), rw = lattice(piece.row[t]);
+            char& was = named[std::size_t(rw + reach) * std::size_t(side) + std::size_t(c + reach)];
+            if (!was) was = 1, disc.squareColumn.push_back(c), disc.squareRow.push_back(rw);
         }
+        const std::size_t q = std::size_t(piece.sector);
+        disc.sectorEnd[q] = i + 1;
+        disc.squareEnd[q] = disc.squareColumn.size();
+        if (i + 1 == pieces.size() || pieces[i + 1].sector != piece.sector) std::fill(named.begin(), named.end(), 0);
     }
+    for (std::size_t q = 1; q < std::size_t(kHeightFieldSectors); ++q)
+        if (disc.sectorEnd[q] == 0) disc.sectorEnd[q] = disc.sectorEnd[q - 1], disc.squareEnd[q] = disc.squareEnd[q - 1];
     disc.reach = reach;
     return disc;
 }
@@ -350,13 +367,7 @@ typedef double LaneDoubles __attribute__((vector_size(64)));
 /// same in every window whatever the window's first column.
 constexpr double kHeightScale = 8388608.0;
 
-/// Sectors of a disc around its centre (quadrants), for the bound on which pieces add to C:
-/// a piece adds nothing where its heights lie within its h̄ of z₀, and terrain mostly slopes
-/// one way, so the largest |z_o − z₀| over a quadrant's heights is often well below the
-/// largest over the whole disc. On a 1000² lidar-like DEM at R = 10 cells the kernel took
-/// 0.86 of its time with one sector; with eight or sixteen, longer than with four (their
-/// squares overlap more sectors, and their bounds take longer than the pieces they skip).
-constexpr int kSectors = 4;
+constexpr int kSectors = kHeightFieldSectors;
 
 /// A disc summed by rows of cells (docs/method.md, Height fields):
 /// - the core taps, whose hat functions lie inside the disc (W_o = the cell's area): a run of
@@ -412,7 +423,13 @@ DiscPlans planDiscs(const std::vector<std::shared_ptr<const DiscSamples>>& discs
     plans.coreWeight = float(((cell / 6 + cell / 3) + cell / 3) + cell / 6);
     const std::ptrdiff_t prefixStride = stride + 1;
     std::map<int, std::pair<int, int>> before;  // the taps of the disc before: row → first and last column
-    std::set<std::pair<int, int>> named[kSectors];  // per sector: the squares that earlier discs name
+    // Per sector, the squares that the discs so far name (by their first cell, within the
+    // largest reach).
+    int largestReach = 0;
+    for (std::size_t k = 0; k < discs.size(); ++k) largestReach = std::max(largestReach, samples(k).reach);
+    const std::size_t side = std::size_t(2 * largestReach + 1);
+    std::vector<char> named[kSectors];
+    for (std::vector<char>& n : named) n.assign(side * side, 0);
     int reach = 0;
     const auto fail = [] { throw std::logic_error("height field: a disc's taps are not runs of cells nested by radius"); };
     // The offset of cell (row, column) from the centre, in 32 bits (the rim's taps and the
@@ -465,38 +482,23 @@ DiscPlans planDiscs(const std::vector<std::shared_ptr<const DiscSamples>>& discs
         for (const auto& [rw, run] : before)
             if (!taps.count(rw)) fail();
         before = std::move(taps);
-        // The pieces by the direction of their centres (the taps' weights are the centre's
-        // barycentric coordinates), h̄ ascending within a sector as in DiscSamples.
-        std::vector<std::pair<int, std::size_t>> bySector(d.size());
+        // The pieces as in DiscSamples (by sector); per sector, the squares no disc before
+        // this one named for it.
         for (std::size_t i = 0; i < d.size(); ++i) {
-            double x = 0, y = 0;
-            for (std::size_t t = 0; t < 3; ++t) x += d.tapWeight[t][i] * d.tapColumn[t][i], y += d.tapWeight[t][i] * d.tapRow[t][i];
-            const double turn = (std::atan2(y * ch, x * cw) + kPi) / (2 * kPi);
-            bySector[i] = {std::clamp(int(turn * kSectors), 0, kSectors - 1), i};
-        }
-        std::stable_sort(bySector.begin(), bySector.end(),
-                         [](const auto& a, const auto& b) { return a.first < b.first; });
-        // A square of 2 × 2 cells from (column, row), moved inside the reach of this disc
-        // (whose cells every lane summed here has).
-        const auto squareOf = [&](int c, int rw) {
-            const auto lattice = [&](int v) { return std::clamp(2 * int(std::floor(0.5 * v)), -reach, reach - 1); };
-            return std::pair<int, int>{lattice(c), lattice(rw)};
-        };
-        std::set<std::pair<int, int>> squares[kSectors];
-        for (const auto& [q, i] : bySector) {
             DiscPlan::Piece piece{d.meanHalfChord[i], d.area[i], {}, {}};
             for (std::size_t t = 0; t < 3; ++t) {
                 piece.weight[t] = d.tapWeight[t][i];
                 piece.at[t] = offset32(d.tapRow[t][i], d.tapColumn[t][i]);
-                squares[q].insert(squareOf(d.tapColumn[t][i], d.tapRow[t][i]));
             }
             plan.pieces.push_back(piece);
-            plan.piecesEnd[q] = std::uint32_t(plan.pieces.size());
         }
         for (int q = 0; q < kSectors; ++q) {
-            if (q > 0 && plan.piecesEnd[q] == 0) plan.piecesEnd[q] = plan.piecesEnd[q - 1];
-            for (const auto& [c, rw] : squares[q])
-                if (named[q].insert({c, rw}).second) plan.squareAt.push_back(offset32(rw, c));
+            plan.piecesEnd[q] = std::uint32_t(d.sectorEnd[std::size_t(q)]);
+            for (std::size_t j = q == 0 ? 0 : d.squareEnd[std::size_t(q) - 1]; j < d.squareEnd[std::size_t(q)]; ++j) {
+                const int c = d.squareColumn[j], rw = d.squareRow[j];
+                char& was = named[std::size_t(q)][std::size_t(rw + largestReach) * side + std::size_t(c + largestReach)];
+                if (!was) was = 1, plan.squareAt.push_back(offset32(rw, c));
+            }
             plan.squaresEnd[q] = std::uint32_t(plan.squareAt.size());
         }
         plans.discs.push_back(std::move(plan));
@@ -687,10 +689,11 @@ __attribute__((target("arch=x86-64-v4"))) void sumDiscsWideOf16(const DiscGrid& 
 /// The values are the same either way; AVX-512 where the processor and the system have it. A
 /// processor of x86-64-v4 has v3 too, so that sumDiscs takes its v3 clone there, with FMA as
 /// here.
-void sumDiscsWide(const DiscGrid& g, const DiscPlans& plans, const float* z0lanes, std::size_t count, double* sums)
+void sumDiscsWide(const DiscGrid& g, const DiscPlans& plans, const float* z0lanes, std::size_t count, double* sums,
+                  int vectorLanes)
 {
     static const bool v4 = __builtin_cpu_supports("x86-64-v4");
-    (v4 ? sumDiscsWideOf16 : sumDiscsWideOf8)(g, plans, z0lanes, count, sums);
+    (v4 && vectorLanes != kLanes ? sumDiscsWideOf16 : sumDiscsWideOf8)(g, plans, z0lanes, count, sums);
 }
 
 /// What one cell of the own rectangle needs: whether every cell of its largest ball has a
@@ -890,7 +893,7 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
                 if (c + kWide <= own.cols && interior(own.col + c, own.col + c + kWide - 1, row)) {
                     float z0[kWide];
                     for (int k = 0; k < kWide; ++k) z0[k] = grid.at(own.col + c + k, row);
-                    sumDiscsWide(gridAt(row, own.col + c), plans, z0, discCount, volume.data());
+                    sumDiscsWide(gridAt(row, own.col + c), plans, z0, discCount, volume.data(), options.vectorLanes);
                     store(r, c, kWide, kWide, whole);
                     c += kWide - kLanes;
                     continue;
