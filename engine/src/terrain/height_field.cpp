@@ -850,27 +850,50 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
     std::vector<std::size_t> slot(discCount);
     for (std::size_t k = 0; k < discCount; ++k) slot[plans.discs[k].index] = k;
 
+    // What each wanted radius's values come from: V(r) over the ball's volume, or for Ŝ the
+    // difference of V at r(1 ± δ) over that of the balls' volumes (the plans' slots).
+    struct Stored {
+        std::size_t radius;      ///< j
+        bool sphere;             ///< Ŝ, else V̂
+        std::size_t slot, below; ///< the sum (Ŝ: at r(1 + δ)) and, for Ŝ, the one at r(1 − δ)
+        double ball;             ///< ⁴⁄₃π r³, or its difference for Ŝ
+    };
+    std::vector<Stored> stored;
+    for (std::size_t j = 0; j < n; ++j) {
+        const double rj = options.radii[j];
+        if (sums.volumeOf[j] >= 0)
+            stored.push_back({j, false, slot[std::size_t(sums.volumeOf[j])], 0, 4.0 / 3.0 * kPi * rj * rj * rj});
+        if (sums.belowOf[j] >= 0 && sums.aboveOf[j] >= 0) {
+            const double below = sums.radius[std::size_t(sums.belowOf[j])], above = sums.radius[std::size_t(sums.aboveOf[j])];
+            stored.push_back({j, true, slot[std::size_t(sums.aboveOf[j])], slot[std::size_t(sums.belowOf[j])],
+                              4.0 / 3.0 * kPi * (above * above * above - below * below * below)});
+        }
+    }
     if (context) context->start("V and S from the heights", std::size_t(own.rows));
     tbb::parallel_for(tbb::blocked_range<int>(0, own.rows), [&](const tbb::blocked_range<int>& range) {
         std::vector<double> volume(discCount * kWide), one(discCount * kLanes);
         std::size_t complete[kLanes];  // per lane: the discs, in the nested order, it has every height of
         // The values of lanes [0, lanes) of the block at own column c from its sums (@p width per disc).
-        const auto store = [&](int r, int c, int lanes, std::size_t width, const std::size_t* completeOf) {
-            const auto done = [&](int s, int k) { return s >= 0 && slot[std::size_t(s)] < completeOf[k]; };
-            const auto sum = [&](int s, int k) { return volume[slot[std::size_t(s)] * width + std::size_t(k)]; };
-            for (int k = 0; k < lanes; ++k) {
-                const std::size_t cell = std::size_t(r) * std::size_t(own.cols) + std::size_t(c + k);
-                for (std::size_t j = 0; j < n; ++j) {
-                    const double rj = options.radii[j];
-                    if (done(sums.volumeOf[j], k))
-                        result.volume[j][cell] = float(0.5 + sum(sums.volumeOf[j], k) / (4.0 / 3.0 * kPi * rj * rj * rj));
-                    if (done(sums.belowOf[j], k) && done(sums.aboveOf[j], k)) {
-                        const double below = sums.radius[std::size_t(sums.belowOf[j])],
-                                     above = sums.radius[std::size_t(sums.aboveOf[j])];
-                        const double dv = sum(sums.aboveOf[j], k) - sum(sums.belowOf[j], k);
-                        result.sphere[j][cell] =
-                            float(0.5 + dv / (4.0 / 3.0 * kPi * (above * above * above - below * below * below)));
-                    }
+        // The values of lanes [0, lanes) of the block at own column c from its sums (@p width
+        // per disc), radius by radius; @p every: each lane has every disc (no check per lane).
+        const auto store = [&](int r, int c, int lanes, std::size_t width, const std::size_t* completeOf, bool every) {
+            const std::size_t cell = std::size_t(r) * std::size_t(own.cols) + std::size_t(c);
+            for (const Stored& o : stored) {
+                const double* v = &volume[o.slot * width];
+                float* out = &(o.sphere ? result.sphere : result.volume)[o.radius][cell];
+                if (o.sphere) {
+                    const double* below = &volume[o.below * width];
+                    const std::size_t needs = std::max(o.slot, o.below);
+                    if (every)
+                        for (int k = 0; k < lanes; ++k) out[k] = float(0.5 + (v[k] - below[k]) / o.ball);
+                    else
+                        for (int k = 0; k < lanes; ++k)
+                            if (needs < completeOf[k]) out[k] = float(0.5 + (v[k] - below[k]) / o.ball);
+                } else if (every) {
+                    for (int k = 0; k < lanes; ++k) out[k] = float(0.5 + v[k] / o.ball);
+                } else {
+                    for (int k = 0; k < lanes; ++k)
+                        if (o.slot < completeOf[k]) out[k] = float(0.5 + v[k] / o.ball);
                 }
             }
         };
@@ -894,7 +917,7 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
                     float z0[kWide];
                     for (int k = 0; k < kWide; ++k) z0[k] = grid.at(own.col + c + k, row);
                     sumDiscsWide(gridAt(row, own.col + c), plans, z0, discCount, volume.data(), options.vectorLanes);
-                    store(r, c, kWide, kWide, whole);
+                    store(r, c, kWide, kWide, whole, true);
                     c += kWide - kLanes;
                     continue;
                 }
@@ -940,7 +963,7 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
                         for (std::size_t s = 0; s < complete[k]; ++s) volume[s * kLanes + std::size_t(k)] = one[s * kLanes];
                     }
                 }
-                store(r, c, lanes, kLanes, complete);
+                store(r, c, lanes, kLanes, complete, all);
             }
             if (context) context->advance();
         }
