@@ -556,15 +556,16 @@ MSII_LANES float largestOf(Lanes16 v)
 /// at heights @p z0lanes, V(r) − ⅔πr³ of the first @p count discs of @p plans, into @p sums
 /// (kLanes · M per disc, in that order): Σ_o W_o (z_o − z₀) over the taps, then C over the
 /// pieces, sector by sector, whose h̄ is at most the lanes' largest |z_o − z₀| over the
-/// sector's squares (a piece past a lane's own has |z − z₀| < h̄ there: no clamp, nothing to
-/// add, and it adds an exact zero).
+/// sector's squares (past a lane's own bound, |z − z₀| < h̄ there up to the interpolation's
+/// rounding: no clamp, nothing to add; each lane sums the pieces its own bound admits, masked,
+/// whatever the other lanes admit).
 /// The sum of each lane depends on its own cells only, and a disc's on the discs before it
 /// only, so that a cell gets the same value in every block, window and tile, whatever the
 /// lanes summed together and the number of discs summed: every lane takes the same operations
 /// in the same order. Products are fused into their sums (-ffp-contract=fast) in the variants
-/// for x86-64-v3 and v4, which have FMA, and in none in the default one; a processor takes
-/// either the first two or the last (sumDiscsWide), so that its blocks and single lanes round
-/// alike.
+/// for x86-64-v3 and v4, which have FMA, alike at every vector width (engine/CMakeLists.txt),
+/// and in the default one only where the whole build targets FMA; a processor takes its v4
+/// blocks only with its v3 single lanes (sumDiscsWide), so that the two round alike.
 /// H vectors V side by side share the pieces' offsets, weights and loop.
 template <int H, class V>
 MSII_LANES void sumDiscsOf(const DiscGrid& g, const DiscPlans& plans, const float* z0lanes, std::size_t count, double* sums)
@@ -760,6 +761,9 @@ void validate(const HeightGrid& grid, const GridRect& own, const HeightFieldOpti
     validateRadii(o.radii);
     if (!(o.cellWidth > 0) || !(o.cellHeight > 0) || !std::isfinite(o.cellWidth) || !std::isfinite(o.cellHeight))
         throw InvalidInputError("the cell size must be positive");
+    if (o.vectorLanes != 0 && o.vectorLanes != kLanes && o.vectorLanes != kWide)
+        throw InvalidInputError("the height field sums 8 or 16 cells per vector (vectorLanes 0, 8 or 16), not " +
+                                std::to_string(o.vectorLanes));
     if (own.col < 0 || own.row < 0 || own.col + own.cols > grid.cols || own.row + own.rows > grid.rows)
         throw InvalidInputError("the cells to compute lie outside the height grid");
     if (grid.z.size() != std::size_t(grid.cols) * std::size_t(grid.rows))
@@ -796,8 +800,8 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
     }
     if (sums.radius.empty() || cells == 0) return result;
     // Three things independent of one another, side by side: the discs' quadratures, which
-    // cells have every height of a ball (HeightCoverage), and the padded heights with their
-    // runs' extremes and the rows' prefix sums.
+    // cells have every height of a ball (HeightCoverage), and the padded heights with the
+    // extremes of their squares of 2 × 2 cells and the rows' prefix sums.
     std::vector<std::shared_ptr<const DiscSamples>> discs(sums.radius.size());
     std::optional<HeightCoverage> coverageOf;
     // The heights with kLanes columns more on the right, so that a block of lanes past the
