@@ -114,10 +114,9 @@ What limits the speed now, and the next steps:
   0.86 of the time of one bound for the whole disc (eight or sixteen sectors cost more in
   their bounds than they save in pieces). Next: the rim's pieces as annular sectors with
   h(ρ) integrated in closed form, so that they can be longer. On a 1000 × 1000 DEM at
-  R = 10 cells (about 0.4 s), the
-  kernel is under half; the process's start (loading GDAL's libraries) takes 0.05 s,
-  reading the coordinate system (PROJ's database) 0.015 s, and writing the Cloud-Optimized
-  GeoTIFF (its ZSTD compression) 0.05 s.
+  R = 10 cells (about 0.4 s), the kernel is under half; the process's start (loading GDAL's
+  libraries) takes 0.05 s, reading the coordinate system (PROJ's database) 0.02 s, and
+  writing the Cloud-Optimized GeoTIFF (its ZSTD compression) 0.05 s.
 
 This machine's timings vary from one sitting to the next, by 15–20 % within a day and by up
 to 2× between days, also in stages whose code did not change: compare builds in alternating
