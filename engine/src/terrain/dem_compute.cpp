@@ -566,16 +566,8 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
     const std::size_t sc = std::size_t(win.cols) + 1;
     std::vector<char> givenSquare(sc * (std::size_t(win.rows) + 1));
     tbb::parallel_for(0, win.rows + 1, [&](int y) {
-        const int r = own.row - 1 + y;
         char* out = &givenSquare[std::size_t(y) * sc];
-        if (r < 0 || r + 1 >= gr || own.col < 1 || own.col + win.cols >= gc) {
-            for (std::size_t x = 0; x < sc; ++x) out[x] = given(own.col - 1 + int(x), r);
-            return;
-        }
-        const GridCell* k0 = &g.kind[std::size_t(r) * std::size_t(gc) + std::size_t(own.col - 1)];
-        const GridCell* k1 = k0 + gc;
-        const auto h = [](GridCell k) { return k == GridCell::Height; };
-        for (std::size_t x = 0; x < sc; ++x) out[x] = h(k0[x]) && h(k0[x + 1]) && h(k1[x]) && h(k1[x + 1]);
+        for (std::size_t x = 0; x < sc; ++x) out[x] = given(own.col - 1 + int(x), own.row - 1 + y);
     });
     std::vector<std::size_t> squaresOfRow(std::size_t(win.rows), 0);
     std::vector<char> onSurface(nOwn, 0);

@@ -367,8 +367,6 @@ typedef double LaneDoubles __attribute__((vector_size(64)));
 /// same in every window whatever the window's first column.
 constexpr double kHeightScale = 8388608.0;
 
-constexpr int kSectors = kHeightFieldSectors;
-
 /// A disc summed by rows of cells (docs/method.md, Height fields):
 /// - the core taps, whose hat functions lie inside the disc (W_o = the cell's area): a run of
 ///   cells per row, summed from the rows' prefix sums of the heights;
@@ -398,9 +396,9 @@ struct DiscPlan {
         std::int32_t at[3];  ///< offsets of its heights' cells
     };
     std::vector<Piece> pieces;
-    std::uint32_t piecesEnd[kSectors] = {};    ///< sector q's pieces end here (start where q − 1's end)
+    std::uint32_t piecesEnd[kHeightFieldSectors] = {};    ///< sector q's pieces end here (start where q − 1's end)
     std::vector<std::int32_t> squareAt;        ///< the new squares' first cells, sector by sector
-    std::uint32_t squaresEnd[kSectors] = {};   ///< sector q's new squares end here
+    std::uint32_t squaresEnd[kHeightFieldSectors] = {};   ///< sector q's new squares end here
 };
 
 struct DiscPlans {
@@ -428,7 +426,7 @@ DiscPlans planDiscs(const std::vector<std::shared_ptr<const DiscSamples>>& discs
     int largestReach = 0;
     for (std::size_t k = 0; k < discs.size(); ++k) largestReach = std::max(largestReach, samples(k).reach);
     const std::size_t side = std::size_t(2 * largestReach + 1);
-    std::vector<char> named[kSectors];
+    std::vector<char> named[kHeightFieldSectors];
     for (std::vector<char>& n : named) n.assign(side * side, 0);
     int reach = 0;
     const auto fail = [] { throw std::logic_error("height field: a disc's taps are not runs of cells nested by radius"); };
@@ -492,7 +490,7 @@ DiscPlans planDiscs(const std::vector<std::shared_ptr<const DiscSamples>>& discs
             }
             plan.pieces.push_back(piece);
         }
-        for (int q = 0; q < kSectors; ++q) {
+        for (int q = 0; q < kHeightFieldSectors; ++q) {
             plan.piecesEnd[q] = std::uint32_t(d.sectorEnd[std::size_t(q)]);
             for (std::size_t j = q == 0 ? 0 : d.squareEnd[std::size_t(q) - 1]; j < d.squareEnd[std::size_t(q)]; ++j) {
                 const int c = d.squareColumn[j], rw = d.squareRow[j];
@@ -578,8 +576,8 @@ MSII_LANES void sumDiscsOf(const DiscGrid& g, const DiscPlans& plans, const floa
     const float* z = g.z;
     // Per sector, the largest and smallest height over its squares so far (disc by disc,
     // nested): the largest |z_o − z₀| is the larger of high − z₀ and z₀ − low, rounded alike.
-    V high[kSectors][H], low[kSectors][H];
-    for (int q = 0; q < kSectors; ++q)
+    V high[kHeightFieldSectors][H], low[kHeightFieldSectors][H];
+    for (int q = 0; q < kHeightFieldSectors; ++q)
         for (int h = 0; h < H; ++h) high[q][h] = low[q][h] = z0[h];
     for (std::size_t k = 0; k < count; ++k) {
         const DiscPlan& disc = plans.discs[k];
@@ -616,7 +614,7 @@ MSII_LANES void sumDiscsOf(const DiscGrid& g, const DiscPlans& plans, const floa
         V clamps[H];
         for (int h = 0; h < H; ++h) clamps[h] = zero;
         const std::int32_t* squares = disc.squareAt.data();
-        for (int q = 0, j = 0; q < kSectors; ++q) {
+        for (int q = 0, j = 0; q < kHeightFieldSectors; ++q) {
             for (const int end = int(disc.squaresEnd[q]); j < end; ++j)
                 for (int h = 0; h < H; ++h) {
                     high[q][h] = maxOf(high[q][h], loadAs<V>(g.squareHigh + squares[j] + h * L));
@@ -860,16 +858,20 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
         std::size_t radius;      ///< j
         bool sphere;             ///< Ŝ, else V̂
         std::size_t slot, below; ///< the sum (Ŝ: at r(1 + δ)) and, for Ŝ, the one at r(1 − δ)
+        std::size_t needs;       ///< a lane with more discs than this has the value
         double ball;             ///< ⁴⁄₃π r³, or its difference for Ŝ
     };
     std::vector<Stored> stored;
     for (std::size_t j = 0; j < n; ++j) {
         const double rj = options.radii[j];
-        if (sums.volumeOf[j] >= 0)
-            stored.push_back({j, false, slot[std::size_t(sums.volumeOf[j])], 0, 4.0 / 3.0 * kPi * rj * rj * rj});
+        if (sums.volumeOf[j] >= 0) {
+            const std::size_t at = slot[std::size_t(sums.volumeOf[j])];
+            stored.push_back({j, false, at, at, at, 4.0 / 3.0 * kPi * rj * rj * rj});
+        }
         if (sums.belowOf[j] >= 0 && sums.aboveOf[j] >= 0) {
             const double below = sums.radius[std::size_t(sums.belowOf[j])], above = sums.radius[std::size_t(sums.aboveOf[j])];
-            stored.push_back({j, true, slot[std::size_t(sums.aboveOf[j])], slot[std::size_t(sums.belowOf[j])],
+            const std::size_t at = slot[std::size_t(sums.aboveOf[j])], under = slot[std::size_t(sums.belowOf[j])];
+            stored.push_back({j, true, at, under, std::max(at, under),
                               4.0 / 3.0 * kPi * (above * above * above - below * below * below)});
         }
     }
@@ -879,26 +881,15 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
         std::size_t complete[kLanes];  // per lane: the discs, in the nested order, it has every height of
         // The values of lanes [0, lanes) of the block at own column c from its sums (@p width per disc).
         // The values of lanes [0, lanes) of the block at own column c from its sums (@p width
-        // per disc), radius by radius; @p every: each lane has every disc (no check per lane).
-        const auto store = [&](int r, int c, int lanes, std::size_t width, const std::size_t* completeOf, bool every) {
+        // per disc), radius by radius, where the lane has the discs they need.
+        const auto store = [&](int r, int c, int lanes, std::size_t width, const std::size_t* completeOf) {
             const std::size_t cell = std::size_t(r) * std::size_t(own.cols) + std::size_t(c);
             for (const Stored& o : stored) {
                 const double* v = &volume[o.slot * width];
+                const double* below = &volume[o.below * width];
                 float* out = &(o.sphere ? result.sphere : result.volume)[o.radius][cell];
-                if (o.sphere) {
-                    const double* below = &volume[o.below * width];
-                    const std::size_t needs = std::max(o.slot, o.below);
-                    if (every)
-                        for (int k = 0; k < lanes; ++k) out[k] = float(0.5 + (v[k] - below[k]) / o.ball);
-                    else
-                        for (int k = 0; k < lanes; ++k)
-                            if (needs < completeOf[k]) out[k] = float(0.5 + (v[k] - below[k]) / o.ball);
-                } else if (every) {
-                    for (int k = 0; k < lanes; ++k) out[k] = float(0.5 + v[k] / o.ball);
-                } else {
-                    for (int k = 0; k < lanes; ++k)
-                        if (o.slot < completeOf[k]) out[k] = float(0.5 + v[k] / o.ball);
-                }
+                for (int k = 0; k < lanes; ++k)
+                    if (o.needs < completeOf[k]) out[k] = float(0.5 + (o.sphere ? v[k] - below[k] : v[k]) / o.ball);
             }
         };
         const auto gridAt = [&](int row, int col) {
@@ -921,7 +912,7 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
                     float z0[kWide];
                     for (int k = 0; k < kWide; ++k) z0[k] = grid.at(own.col + c + k, row);
                     sumDiscsWide(gridAt(row, own.col + c), plans, z0, discCount, volume.data(), options.vectorLanes);
-                    store(r, c, kWide, kWide, whole, true);
+                    store(r, c, kWide, kWide, whole);
                     c += kWide - kLanes;
                     continue;
                 }
@@ -967,7 +958,7 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
                         for (std::size_t s = 0; s < complete[k]; ++s) volume[s * kLanes + std::size_t(k)] = one[s * kLanes];
                     }
                 }
-                store(r, c, lanes, kLanes, complete, all);
+                store(r, c, lanes, kLanes, complete);
             }
             if (context) context->advance();
         }
