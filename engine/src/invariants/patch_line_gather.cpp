@@ -62,11 +62,11 @@ __attribute__((target_clones("avx512f", "avx2", "default"))) void binSamples(
 struct Gathered {
     std::vector<float> x, y, z, a;
     std::array<std::vector<float>, 6> t, c;  // normal tensor, covariance
-    void clear()
+    void resize(std::size_t n)
     {
-        x.clear(), y.clear(), z.clear(), a.clear();
-        for (auto& v : t) v.clear();
-        for (auto& v : c) v.clear();
+        x.resize(n), y.resize(n), z.resize(n), a.resize(n);
+        for (auto& v : t) v.resize(n);
+        for (auto& v : c) v.resize(n);
     }
 };
 
@@ -106,11 +106,12 @@ struct GroupOrigin {
 /// Per-thread buffers of evaluatePoints.
 struct GatherScratch {
     Gathered near;
+    std::vector<std::uint32_t> picked;  // the level's samples in near, in order
     std::vector<std::array<float, 6>> chunkBox;  // min x, y, z, max x, y, z
     std::vector<std::int32_t> bins;
     std::vector<float> share;
     std::vector<float> channels;  // kChannels per sample
-    std::vector<Channels> hist;   // numBins + 1
+    std::vector<Channels> hist;   // numBins + 2: the last two for the samples beyond reach
 };
 
 /// The kernel sums of one level at points in groups of cells (evaluatePoints): what every
@@ -132,7 +133,7 @@ public:
     GatherScratch scratch() const
     {
         GatherScratch s;
-        s.hist.resize(static_cast<std::size_t>(mNumBins) + 1);
+        s.hist.resize(static_cast<std::size_t>(mNumBins) + 2);
         return s;
     }
 
@@ -150,24 +151,61 @@ public:
     /// into @p near, and the bounding boxes of their runs.
     void gather(const GroupOrigin& g, GatherScratch& scratch) const
     {
-        Gathered& near = scratch.near;
-        near.clear();
-        const std::int64_t lo[3] = {g.gx - mReachCells, g.gy - mReachCells, g.gz - mReachCells};
-        const std::int64_t hi[3] = {g.gx + mGroupCells - 1 + mReachCells, g.gy + mGroupCells - 1 + mReachCells,
-                                    g.gz + mGroupCells - 1 + mReachCells};
-        forEachSampleInCells(mLevel, lo, hi, [&](std::uint32_t s) {
-            // Only samples within reach of the group's box (the blocks bring more).
-            const double x = mLevel.cx[s] - g.ox, y = mLevel.cy[s] - g.oy, z = mLevel.cz[s] - g.oz;
-            if (squaredDistanceToBox(x, y, z, mGroupBox) >= mReach2) return;
-            near.x.push_back(float(x));
-            near.y.push_back(float(y));
-            near.z.push_back(float(z));
-            near.a.push_back(mLevel.area[s]);
-            for (std::size_t c = 0; c < 6; ++c) {
-                near.t[c].push_back(mLevel.tensor[c][s]);
-                near.c[c].push_back(mLevel.covariance[c][s]);
+        // Which samples first, then each of their numbers in a loop of its own (the same
+        // values in the same order as pushing them sample by sample, at a fraction of the cost).
+        std::vector<std::uint32_t>& picked = scratch.picked;
+        picked.clear();
+        // The 8³-cell blocks around the group: one wholly beyond reach of its box is not
+        // looked up, one wholly within reach is taken whole, the others sample by sample
+        // (with margins against rounding, the samples taken are those of the test alone).
+        const std::int64_t g0[3] = {g.gx, g.gy, g.gz};
+        std::int64_t lo[3], hi[3];
+        for (int a = 0; a < 3; ++a)
+            lo[a] = std::max<std::int64_t>(0, g0[a] - mReachCells) >> 3, hi[a] = (g0[a] + mGroupCells - 1 + mReachCells) >> 3;
+        const auto gaps = [&](int a, std::int64_t b) {  // block b's nearest and farthest gap to the box, axis a
+            const double b0 = double(8 * b - g0[a]) * mH, b1 = b0 + 8 * mH;
+            const double nearGap = std::max({0.0, b0 - mGroupSide, -b1}), farGap = std::max({0.0, b1 - mGroupSide, -b0});
+            return std::pair<double, double>(nearGap * nearGap, farGap * farGap);
+        };
+        const double beyond2 = mReach2 * (1 + 1e-6), within2 = mReach2 * (1 - 1e-6);
+        for (std::int64_t bx = lo[0]; bx <= hi[0]; ++bx) {
+            const auto [nx, fx] = gaps(0, bx);
+            for (std::int64_t by = lo[1]; by <= hi[1]; ++by) {
+                const auto [ny, fy] = gaps(1, by);
+                if (nx + ny >= beyond2) continue;
+                for (std::int64_t bz = lo[2]; bz <= hi[2]; ++bz) {
+                    const auto [nz, fz] = gaps(2, bz);
+                    if (nx + ny + nz >= beyond2) continue;
+                    const auto it = mLevel.blocks.find(morton(std::uint64_t(bx), std::uint64_t(by), std::uint64_t(bz)));
+                    if (it == mLevel.blocks.end()) continue;
+                    const auto [first, last] = it->second;
+                    if (fx + fy + fz < within2) {
+                        for (std::uint32_t s = first; s < last; ++s) picked.push_back(s);
+                        continue;
+                    }
+                    for (std::uint32_t s = first; s < last; ++s) {
+                        const double x = mLevel.cx[s] - g.ox, y = mLevel.cy[s] - g.oy, z = mLevel.cz[s] - g.oz;
+                        if (squaredDistanceToBox(x, y, z, mGroupBox) < mReach2) picked.push_back(s);
+                    }
+                }
             }
-        });
+        }
+        const std::size_t n = picked.size();
+        Gathered& near = scratch.near;
+        near.resize(n);
+        const std::uint32_t* at = picked.data();
+        for (std::size_t k = 0; k < n; ++k) near.x[k] = float(mLevel.cx[at[k]] - g.ox);
+        for (std::size_t k = 0; k < n; ++k) near.y[k] = float(mLevel.cy[at[k]] - g.oy);
+        for (std::size_t k = 0; k < n; ++k) near.z[k] = float(mLevel.cz[at[k]] - g.oz);
+        for (std::size_t k = 0; k < n; ++k) near.a[k] = mLevel.area[at[k]];
+        for (std::size_t c = 0; c < 6; ++c) {
+            const float* tensor = mLevel.tensor[c].data();
+            const float* covariance = mLevel.covariance[c].data();
+            float* t = near.t[c].data();
+            float* cv = near.c[c].data();
+            for (std::size_t k = 0; k < n; ++k) t[k] = tensor[at[k]];
+            for (std::size_t k = 0; k < n; ++k) cv[k] = covariance[at[k]];
+        }
         const std::size_t ns = near.x.size();
         scratch.bins.resize(ns), scratch.share.resize(ns), scratch.channels.resize(kChannels * ns);
         boundChunks(near, scratch.chunkBox);
@@ -201,8 +239,9 @@ public:
                        near.c[5].data() + first, px, py, pz, float(mReach2), float(1.0 / mKernel.bin),
                        float(0.5 * mH), numBins, scratch.bins.data(), scratch.share.data(),
                        scratch.channels.data());
+            // Samples beyond reach (bin numBins) go to two bins of their own that no kernel
+            // reads: a branch here would be mispredicted for about a fifth of them.
             for (std::size_t s = 0; s < count; ++s) {
-                if (scratch.bins[s] == numBins) continue;  // beyond reach
                 Channels* at = hist.data() + scratch.bins[s];
                 const Channels v = loadChannels(scratch.channels.data() + kChannels * s), vw = v * scratch.share[s];
                 at[0] += v - vw;  // bin b
