@@ -3,7 +3,7 @@
 #include <msii/core/errors.h>
 
 #ifndef MSII_LEVELSET_BUILTIN
-#include <dlfcn.h>
+#include "../core/engine_library.h"
 #endif
 
 #include <string>
@@ -11,47 +11,14 @@
 
 namespace msii {
 namespace detail {
-namespace {
-
-#ifndef MSII_LEVELSET_BUILTIN
-/// libmsii_levelset from the folder of the libmsii that runs this (dladdr: the build tree's
-/// and an installation's alike), else by the loader's search path.
-const LevelSetBackend* loadBackend()
-{
-    const std::string name = MSII_LEVELSET_LIBRARY;
-    std::string tried, path = name;
-    Dl_info self{};
-    if (dladdr(reinterpret_cast<void*>(&levelSetBackend), &self) != 0 && self.dli_fname != nullptr) {
-        const std::string library = self.dli_fname;
-        const std::size_t slash = library.rfind('/');
-        if (slash != std::string::npos) path = library.substr(0, slash + 1) + name;
-    }
-    void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-    if (handle == nullptr && path != name) {
-        const char* error = dlerror();
-        tried = error ? error : path + ": not found";
-        handle = dlopen(name.c_str(), RTLD_NOW | RTLD_LOCAL);
-    }
-    if (handle == nullptr) {
-        const char* error = dlerror();
-        throw IOError("cannot load msii's level-set library " + name + " (" + (tried.empty() ? "" : tried + "; ") +
-                      (error ? error : "not found") + "): reinstall msii");
-    }
-    using Entry = const LevelSetBackend* (*)();
-    const auto entry = reinterpret_cast<Entry>(dlsym(handle, "msii_levelset_backend"));
-    if (entry == nullptr) throw IOError("msii's level-set library " + path + " lacks its entry point: reinstall msii");
-    return entry();
-}
-#endif
-
-} // namespace
 
 const LevelSetBackend& levelSetBackend()
 {
 #ifdef MSII_LEVELSET_BUILTIN
     return *msii_levelset_backend();
 #else
-    static const LevelSetBackend* const backend = loadBackend();
+    static const LevelSetBackend* const backend = static_cast<const LevelSetBackend*>(
+        loadEngineLibrary(MSII_LEVELSET_LIBRARY, "msii_levelset_backend", "level-set"));
     return *backend;
 #endif
 }
