@@ -101,16 +101,19 @@ What limits the speed now, and the next steps:
   (4 median edges), where 78 % of the vertices are flagged, yet 99 % of those pairs had
   kernel values within the stated bounds already (every 97th vertex away from the rim,
   `computePatchLine` with `keepCheck` against `computeExact`): at the smallest radii the
-  narrow kernel's own noise on the finest level is about the size of the thresholds.
-  Next: a check that allows for that noise, and kernels that err less on the coarser levels,
-  so that fewer pairs are flagged.
+  narrow kernel's own noise on the finest level is about the size of the thresholds. A
+  check that allows for that noise would spare a third of the tablet's exact sums, but it
+  lets pairs beyond the stated bounds through where events and noise add (the Stanford
+  bunny, rough thin sheets), so the check stays ([method.md](method.md#exact-where-the-kernels-blur)).
+  Next: kernels that err less on the coarser levels, so that fewer pairs are flagged.
 - **P and L's kernel sums**: per vertex, the histograms of the samples within reach, over
   distance (binning 26 %, adding into the histograms 50 % of the stage, callgrind on the 39k
   slab). Next: histograms shared by neighbouring vertices.
 - **V and S**: the level set and the stencils. The level set's cost follows the surface's
   area over the finest voxel squared, not the vertices: a slab whose walls and bottom are a
-  few long triangles pays for their area as for the top's. Next: a coarser level set where
-  no vertex is near.
+  few long triangles pays for their area as for the top's. It includes loading OpenVDB's
+  libraries (about 0.04 s; twice that while GDAL's were loaded into every run,
+  [architecture.md](architecture.md)). Next: a coarser level set where no vertex is near.
 - **DEMs** on the height field: the kernel is most of the time (reading, filling,
   continuing and writing the rest). It sums sixteen cells at a time (one AVX-512 register
   where the processor has it, two AVX2 registers elsewhere), its products fused into its
@@ -120,8 +123,8 @@ What limits the speed now, and the next steps:
   0.86 of the time of one bound for the whole disc (eight or sixteen sectors cost more in
   their bounds than they save in pieces). Next: the rim's pieces as annular sectors with
   h(ρ) integrated in closed form, so that they can be longer. On a 1000 × 1000 DEM at
-  R = 10 cells (about 0.4 s), the kernel is under half; the process's start (loading GDAL's
-  libraries) takes 0.05 s, reading the coordinate system (PROJ's database) 0.02 s, and
+  R = 10 cells (about 0.4 s), the kernel is under half; loading GDAL's libraries (on the
+  first raster read) takes 0.05 s, reading the coordinate system (PROJ's database) 0.02 s, and
   writing the Cloud-Optimized GeoTIFF (its ZSTD compression) 0.05 s.
 
 This machine's timings vary from one sitting to the next, by 15–20 % within a day and by up

@@ -4,7 +4,6 @@
 
 #include <msii/core/errors.h>
 
-
 #include <algorithm>
 #include <array>
 #include <cmath>

@@ -16,7 +16,6 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
-#include <iomanip>
 #include <sstream>
 #include <memory>
 #include <mutex>

@@ -93,7 +93,7 @@ public:
     Dem read(int col0, int row0, int cols, int rows) const;
 
 private:
-    struct Impl;  // the GDAL dataset
+    struct Impl;  // the GDAL dataset, in libmsii_raster (src/terrain/raster_backend.h)
     std::unique_ptr<Impl> mImpl;
     Dem mInfo;
 };
