@@ -123,7 +123,7 @@ What limits the speed now, and the next steps:
   0.86 of the time of one bound for the whole disc (eight or sixteen sectors cost more in
   their bounds than they save in pieces). Next: the rim's pieces as annular sectors with
   h(ρ) integrated in closed form, so that they can be longer. On a 1000 × 1000 DEM at
-  R = 10 cells (about 0.4 s), the kernel is under half; loading GDAL's libraries (on the
+  R = 10 cells (about 0.3 s), the kernel is under half; loading GDAL's libraries (on the
   first raster read) takes 0.05 s, reading the coordinate system (PROJ's database) 0.02 s, and
   writing the Cloud-Optimized GeoTIFF (its ZSTD compression) 0.05 s.
 
