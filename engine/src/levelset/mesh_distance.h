@@ -10,36 +10,6 @@
 
 namespace msii::detail {
 
-/// Features of a triangle (a, b, c) that can hold the closest point.
-enum Feature { kFace, kVertexA, kVertexB, kVertexC, kEdgeAB, kEdgeBC, kEdgeCA };
-
-/// Closest point on triangle (a, b, c) to p and the feature it lies on (Voronoi regions,
-/// as in Ericson, Real-Time Collision Detection, 5.1.5).
-inline Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, int& feature)
-{
-    const Vec3 ab = b - a, ac = c - a, ap = p - a;
-    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-    if (d1 <= 0 && d2 <= 0) { feature = kVertexA; return a; }
-    const Vec3 bp = p - b;
-    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-    if (d3 >= 0 && d4 <= d3) { feature = kVertexB; return b; }
-    const double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0 && d1 >= 0 && d3 <= 0) { feature = kEdgeAB; return a + ab * (d1 / (d1 - d3)); }
-    const Vec3 cp = p - c;
-    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-    if (d6 >= 0 && d5 <= d6) { feature = kVertexC; return c; }
-    const double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0 && d2 >= 0 && d6 <= 0) { feature = kEdgeCA; return a + ac * (d2 / (d2 - d6)); }
-    const double va = d3 * d6 - d5 * d4;
-    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-        feature = kEdgeBC;
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-    }
-    feature = kFace;
-    const double denom = 1.0 / (va + vb + vc);
-    return a + ab * (vb * denom) + ac * (vc * denom);
-}
-
 class MeshDistance {
 public:
     /// Keeps a reference: @p mesh must outlive this object.
@@ -54,14 +24,15 @@ public:
     double exactSignedDistance(const Vec3& x, std::uint32_t startVertex, double cellSize) const;
 
     /// The closest point of one triangle to a point, and the feature (face, edge or vertex)
-    /// it lies on. Inline, as closestPointOnTriangle: the band's rasterization asks for it
-    /// at every voxel near a triangle, where a call cost about as much as the work.
+    /// it lies on.
     struct Closest {
         double squaredDistance = 0;
         Vec3 point;
         std::uint32_t face = 0;
         int feature = 0;
     };
+    /// Inline, as closestPointOnTriangle: the band's rasterization asks for it at every voxel
+    /// near a triangle, where a call cost about as much as the work.
     Closest closestOnFace(const Vec3& x, std::uint32_t f) const
     {
         Closest c;
@@ -93,6 +64,36 @@ public:
     const Vec3& vertexNormal(std::size_t v) const { return mVertexNormal[v]; }
 
 private:
+    /// Features of a triangle (a, b, c) that can hold the closest point.
+    enum Feature { kFace, kVertexA, kVertexB, kVertexC, kEdgeAB, kEdgeBC, kEdgeCA };
+
+    /// Closest point on triangle (a, b, c) to p and the feature it lies on (Voronoi regions,
+    /// as in Ericson, Real-Time Collision Detection, 5.1.5).
+    static Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, int& feature)
+    {
+        const Vec3 ab = b - a, ac = c - a, ap = p - a;
+        const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+        if (d1 <= 0 && d2 <= 0) { feature = kVertexA; return a; }
+        const Vec3 bp = p - b;
+        const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+        if (d3 >= 0 && d4 <= d3) { feature = kVertexB; return b; }
+        const double vc = d1 * d4 - d3 * d2;
+        if (vc <= 0 && d1 >= 0 && d3 <= 0) { feature = kEdgeAB; return a + ab * (d1 / (d1 - d3)); }
+        const Vec3 cp = p - c;
+        const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+        if (d6 >= 0 && d5 <= d6) { feature = kVertexC; return c; }
+        const double vb = d5 * d2 - d1 * d6;
+        if (vb <= 0 && d2 >= 0 && d6 <= 0) { feature = kEdgeCA; return a + ac * (d2 / (d2 - d6)); }
+        const double va = d3 * d6 - d5 * d4;
+        if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+            feature = kEdgeBC;
+            return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+        }
+        feature = kFace;
+        const double denom = 1.0 / (va + vb + vc);
+        return a + ab * (vb * denom) + ac * (vc * denom);
+    }
+
     double faceDistance(const Vec3& x, std::uint32_t f, Vec3& closest, int& feature) const
     {
         const auto& t = mMesh.triangles[f];

@@ -4,10 +4,17 @@
 
 #include <msii/core/errors.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <filesystem>
+#include <functional>
+#include <limits>
 #include <iomanip>
 #include <sstream>
 
@@ -34,6 +41,7 @@ double shortestCellStep(const RasterGeoreference& grid)
 
 struct DemSource::Impl {
     detail::DemDataset* dataset = nullptr;  // the raster library's
+    detail::DemBand heights;
     ~Impl()
     {
         if (dataset != nullptr) detail::rasterBackend().closeDem(dataset);
@@ -42,14 +50,56 @@ struct DemSource::Impl {
 
 DemSource::DemSource(const std::string& path, const DemReadOptions& options) : mImpl(std::make_unique<Impl>())
 {
-    mImpl->dataset = detail::rasterBackend().openDem(path, options, mInfo);
+    mImpl->dataset = detail::rasterBackend().openDem(path, options, mInfo, mImpl->heights);
 }
 
 DemSource::~DemSource() = default;
 
 Dem DemSource::read(int col0, int row0, int cols, int rows) const
 {
-    return detail::rasterBackend().readDem(*mImpl->dataset, mInfo, col0, row0, cols, rows);
+    const RasterGeoreference& whole = mInfo.georeference;
+    if (col0 < 0 || row0 < 0 || cols < 1 || rows < 1 || col0 + cols > whole.width || row0 + rows > whole.height)
+        throw InvalidInputError("the window lies outside the raster");
+    Dem dem;
+    dem.band = mInfo.band;
+    dem.bandsInFile = mInfo.bandsInFile;
+    RasterGeoreference& g = dem.georeference;
+    g = whole;
+    g.width = cols;
+    g.height = rows;
+    const std::array<double, 6>& t = whole.transform;
+    g.transform[0] = t[0] + col0 * t[1] + row0 * t[2];
+    g.transform[3] = t[3] + col0 * t[4] + row0 * t[5];
+    dem.heights.resize(std::size_t(cols) * std::size_t(rows));
+    detail::rasterBackend().readHeights(*mImpl->dataset, col0, row0, cols, rows, dem.heights.data());
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    // GDAL's scale and offset give the heights; nodata is compared before scaling.
+    const detail::DemBand& band = mImpl->heights;
+    const float nodata = float(band.nodata);
+    // In parallel (a window has millions of cells): nodata to NaN, scaling, and whether any
+    // height is implausible (rare: those are then taken one by one, in the cells' order).
+    const double metresPerUnit = g.metresPerUnit;
+    std::atomic<bool> implausible{false};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, dem.heights.size(), 1 << 16),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                          bool seen = false;
+                          for (std::size_t c = range.begin(); c < range.end(); ++c) {
+                              float& h = dem.heights[c];
+                              if (!std::isfinite(h) || (band.hasNodata && h == nodata)) h = nan;
+                              else if (band.scaled) h = float(double(h) * band.scale + band.offset);
+                              seen = seen || (!std::isnan(h) && isImplausibleHeight(h, metresPerUnit));
+                          }
+                          if (seen) implausible = true;
+                      });
+    if (implausible) dem.undeclared = implausibleHeightsToNaN(dem.heights, metresPerUnit);
+    dem.numValid = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, dem.heights.size(), 1 << 16), std::size_t(0),
+        [&](const tbb::blocked_range<std::size_t>& range, std::size_t n) {
+            for (std::size_t c = range.begin(); c < range.end(); ++c) n += !std::isnan(dem.heights[c]);
+            return n;
+        },
+        std::plus<std::size_t>());
+    return dem;
 }
 
 std::string crsWkt(const std::string& definition) { return detail::rasterBackend().crsWkt(definition); }

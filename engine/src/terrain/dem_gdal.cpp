@@ -6,16 +6,11 @@
 #include <cpl_error.h>
 #include <cpl_string.h>
 #include <ogr_spatialref.h>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <filesystem>
-#include <functional>
 #include <sstream>
 #include <memory>
 #include <mutex>
@@ -96,11 +91,10 @@ std::optional<std::array<double, 2>> centreInDegrees(GDALDataset& ds, const OGRS
 struct DemDataset {
     std::string path;
     GdalDataset dataset;
-    double nodata = 0;
-    bool hasNodata = false;
+    int band = 1;
 };
 
-DemDataset* openDemHere(const std::string& path, const DemReadOptions& options, Dem& info)
+DemDataset* openDemHere(const std::string& path, const DemReadOptions& options, Dem& info, DemBand& heights)
 {
     auto source = std::make_unique<DemDataset>();
     source->path = path;
@@ -153,67 +147,25 @@ DemDataset* openDemHere(const std::string& path, const DemReadOptions& options, 
         }
     const double det = g.transform[1] * g.transform[5] - g.transform[2] * g.transform[4];
     if (!(std::abs(det) > 0) || !std::isfinite(det)) throw InvalidInputError(name + " has a degenerate geotransform");
-    int hasNodata = 0;
-    source->nodata = ds.GetRasterBand(info.band)->GetNoDataValue(&hasNodata);
-    source->hasNodata = hasNodata != 0;
+    GDALRasterBand* band = ds.GetRasterBand(info.band);
+    int hasNodata = 0, hasScale = 0, hasOffset = 0;
+    heights.nodata = band->GetNoDataValue(&hasNodata);
+    heights.hasNodata = hasNodata != 0;
+    const double scale = band->GetScale(&hasScale), offset = band->GetOffset(&hasOffset);
+    heights.scaled = (hasScale && scale != 1.0) || (hasOffset && offset != 0.0);
+    if (heights.scaled) heights.scale = scale, heights.offset = offset;
+    source->band = info.band;
     return source.release();
 }
 
 void closeDemHere(DemDataset* dataset) { delete dataset; }
 
-Dem readDemHere(const DemDataset& source, const Dem& info, int col0, int row0, int cols, int rows)
+void readHeightsHere(const DemDataset& source, int col0, int row0, int cols, int rows, float* heights)
 {
-    const RasterGeoreference& whole = info.georeference;
-    if (col0 < 0 || row0 < 0 || cols < 1 || rows < 1 || col0 + cols > whole.width || row0 + rows > whole.height)
-        throw InvalidInputError("the window lies outside the raster");
-    Dem dem;
-    dem.band = info.band;
-    dem.bandsInFile = info.bandsInFile;
-    RasterGeoreference& g = dem.georeference;
-    g = whole;
-    g.width = cols;
-    g.height = rows;
-    const std::array<double, 6>& t = whole.transform;
-    g.transform[0] = t[0] + col0 * t[1] + row0 * t[2];
-    g.transform[3] = t[3] + col0 * t[4] + row0 * t[5];
-    dem.heights.resize(std::size_t(cols) * std::size_t(rows));
     CPLErrorReset();
-    if (source.dataset->GetRasterBand(info.band)->RasterIO(GF_Read, col0, row0, cols, rows, dem.heights.data(), cols, rows,
-                                                      GDT_Float32, 0, 0, nullptr) != CE_None)
- throw IOError("cannot read the heights of '" + source.path + "': " + lastGdalError("read error"));
-    const float nan = std::numeric_limits<float>::quiet_NaN();
-    const float nodata = float(source.nodata);
-    // Heights stored as scaled integers (e.g. centimetres in Int16 with a scale of 0.01):
-    // GDAL's scale and offset give metres; nodata is compared before scaling.
-    int hasScale = 0, hasOffset = 0;
-    GDALRasterBand* band = source.dataset->GetRasterBand(info.band);
-    const double scale = band->GetScale(&hasScale), offset = band->GetOffset(&hasOffset);
-    const bool scaled = (hasScale && scale != 1.0) || (hasOffset && offset != 0.0);
-    // In parallel (a window has millions of cells): nodata to NaN, scaling, and whether any
-    // height is implausible (rare: those are then taken one by one, in the cells' order).
-    const bool hasNodata = source.hasNodata;
-    const double metresPerUnit = g.metresPerUnit;
-    std::atomic<bool> implausible{false};
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, dem.heights.size(), 1 << 16),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                          bool seen = false;
-                          for (std::size_t c = range.begin(); c < range.end(); ++c) {
-                              float& h = dem.heights[c];
-                              if (!std::isfinite(h) || (hasNodata && h == nodata)) h = nan;
-                              else if (scaled) h = float(double(h) * scale + offset);
-                              seen = seen || (!std::isnan(h) && isImplausibleHeight(h, metresPerUnit));
-                          }
-                          if (seen) implausible = true;
-                      });
-    if (implausible) dem.undeclared = implausibleHeightsToNaN(dem.heights, metresPerUnit);
-    dem.numValid = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, dem.heights.size(), 1 << 16), std::size_t(0),
-        [&](const tbb::blocked_range<std::size_t>& range, std::size_t n) {
-            for (std::size_t c = range.begin(); c < range.end(); ++c) n += !std::isnan(dem.heights[c]);
-            return n;
-        },
-        std::plus<std::size_t>());
-    return dem;
+    if (source.dataset->GetRasterBand(source.band)->RasterIO(GF_Read, col0, row0, cols, rows, heights, cols, rows,
+                                                             GDT_Float32, 0, 0, nullptr) != CE_None)
+        throw IOError("cannot read the heights of '" + source.path + "': " + lastGdalError("read error"));
 }
 
 std::string crsWktHere(const std::string& definition)

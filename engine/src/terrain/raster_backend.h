@@ -17,9 +17,18 @@ namespace msii::detail {
 struct DemDataset;
 struct PieceDataset;
 
+/// How a height raster's band stores its heights: a value meaning nodata (compared before
+/// scaling), and GDAL's scale and offset, which give the heights (e.g. centimetres in Int16
+/// with a scale of 0.01).
+struct DemBand {
+    double nodata = 0, scale = 1, offset = 0;
+    bool hasNodata = false, scaled = false;
+};
+
 struct RasterBackend {
-    DemDataset* (*openDem)(const std::string& path, const DemReadOptions& options, Dem& info);
-    Dem (*readDem)(const DemDataset& dataset, const Dem& info, int col0, int row0, int cols, int rows);
+    DemDataset* (*openDem)(const std::string& path, const DemReadOptions& options, Dem& info, DemBand& heights);
+    /// The band's values in cells [col0, col0 + cols) × [row0, row0 + rows), row-major, as stored.
+    void (*readHeights)(const DemDataset& dataset, int col0, int row0, int cols, int rows, float* heights);
     void (*closeDem)(DemDataset* dataset);
     PieceDataset* (*openPieces)(const std::string& path, const RasterGeoreference& grid,
                                 const std::vector<std::string>& bandNames, const RasterOutputOptions& options);
@@ -34,8 +43,8 @@ struct RasterBackend {
 };
 
 /// In the raster library: the functions of the table.
-DemDataset* openDemHere(const std::string& path, const DemReadOptions& options, Dem& info);
-Dem readDemHere(const DemDataset& dataset, const Dem& info, int col0, int row0, int cols, int rows);
+DemDataset* openDemHere(const std::string& path, const DemReadOptions& options, Dem& info, DemBand& heights);
+void readHeightsHere(const DemDataset& dataset, int col0, int row0, int cols, int rows, float* heights);
 void closeDemHere(DemDataset* dataset);
 PieceDataset* openPiecesHere(const std::string& path, const RasterGeoreference& grid,
                              const std::vector<std::string>& bandNames, const RasterOutputOptions& options);

@@ -248,7 +248,7 @@ extern "C" const msii::detail::RasterBackend* msii_raster_backend()
 {
     using namespace msii::detail;
     static const RasterBackend backend{
-        &openDemHere,   &readDemHere,         &closeDemHere,   &openPiecesHere, &writePieceHere,   &commitPiecesHere,
+        &openDemHere,   &readHeightsHere,         &closeDemHere,   &openPiecesHere, &writePieceHere,   &commitPiecesHere,
         &closePiecesHere, &joinRasterPartsHere, &readRasterHere, &crsWktHere,     &regionOfPartHere, &isRasterFileHere,
     };
     return &backend;
