@@ -63,6 +63,8 @@ public:
     }
 
     std::size_t size() const { return mFlagged.size(); }
+    /// r_k² of flagged radius k.
+    double squaredRadius(std::size_t k) const { return mSquared[k]; }
     double largestRadius() const { return mRadii[mFlagged.back()]; }
     double radius(std::size_t k) const { return mRadii[mFlagged[k]]; }
     /// The first flagged radius k with r_k² > @p x2 (size() if none).
@@ -519,6 +521,7 @@ public:
     /// Adds every triangle of @p grids near @p p to the sums.
     void run(const Vec3& p, const std::vector<CellGrid>& grids)
     {
+        mRunWhole.resize(mSums.size() + 1);
         const double reach = mSums.largestRadius();
         // A margin against rounding: a block is added whole only if no flagged radius comes
         // near its nearest or farthest point, so that each of its triangles would be
@@ -556,48 +559,82 @@ private:
 
     /// Adds the triangles of slots [@p s0, @p s1) (at most kChunk): as the exact mode's
     /// VertexBall (exact.cpp), at the flagged radii. Their bounding spheres first, all
-    /// together (a loop that vectorises): where no flagged sphere comes near one, it is
-    /// whole inside from one radius on, or beyond reach, without its corners.
+    /// together (loops that vectorise): where no flagged sphere comes near one, it is whole
+    /// inside from one radius on, or beyond reach, without its corners.
     void addTriangles(const Vec3& p, const CellGrid::Slots& slots, std::uint32_t s0, std::uint32_t s1, double margin)
     {
         const std::size_t m = s1 - s0;
-        double near2[kChunk], far2[kChunk], near[kChunk];
+        double near2[kChunk], far2[kChunk];
+        double lowest = INFINITY, highest = 0;
         for (std::size_t j = 0; j < m; ++j) {
             const double dx = slots.x[s0 + j] - p.x, dy = slots.y[s0 + j] - p.y, dz = slots.z[s0 + j] - p.z;
             const double centre = std::sqrt(dx * dx + dy * dy + dz * dz), rho = slots.radius[s0 + j];
             const double lo = std::max(0.0, centre - rho - margin), hi = centre + rho + margin;
-            near[j] = lo, near2[j] = lo * lo, far2[j] = hi * hi;
+            near2[j] = lo * lo, far2[j] = hi * hi;
+            lowest = std::min(lowest, lo * lo), highest = std::max(highest, hi * hi);
         }
-        const std::size_t n = mSums.size();
-        for (std::size_t j = 0; j < m; ++j) {
-            const std::size_t first = mSums.firstAbove(near2[j]);  // near2 >= 0
-            if (first >= n) continue;  // beyond every flagged radius
-            const std::uint32_t s = s0 + std::uint32_t(j);
-            const std::size_t whole = mSums.firstAtLeast(far2[j]);
-            if (first == whole) {
-                mSums.addWhole(whole, slots.area[s]);
-                continue;
+        // Per triangle, the first flagged radius above its nearest point (first) and the
+        // first at or beyond its farthest (whole), as counts of the radii² below: every
+        // triangle of the run counts the radii below the run's nearest point, and none those
+        // at or beyond its farthest, so that only the few radii between are compared.
+        const std::size_t n = mSums.size(), below = mSums.firstAbove(lowest), upTo = mSums.firstAtLeast(highest);
+        std::int32_t first[kChunk], whole[kChunk];
+        for (std::size_t j = 0; j < m; ++j) first[j] = std::int32_t(below), whole[j] = std::int32_t(below);
+        for (std::size_t k = below; k < upTo; ++k) {
+            const double r2 = mSums.squaredRadius(k);
+            for (std::size_t j = 0; j < m; ++j) {
+                first[j] += r2 <= near2[j] ? 1 : 0;
+                whole[j] += r2 < far2[j] ? 1 : 0;
             }
-            addCorners(p, slots, s, near[j]);
         }
-    }
-
-    /// Adds the triangle of slot @p s whose bounding sphere (nearest @p near to p) a flagged
-    /// sphere may cut: by its corners.
-    void addCorners(const Vec3& p, const CellGrid::Slots& slots, std::uint32_t s, double near)
-    {
-        const std::array<Vec3, 3>& corners = slots.corners[s];
-        const std::array<Vec3, 3> q{corners[0] - p, corners[1] - p, corners[2] - p};
-        const double q2[3] = {squaredNorm(q[0]), squaredNorm(q[1]), squaredNorm(q[2])};
-        // From the first flagged radius at or beyond its farthest corner on, whole inside.
-        const std::size_t wholeFrom = mSums.firstAtLeast(std::max({q2[0], q2[1], q2[2]}));
-        if (wholeFrom < mSums.size()) mSums.addWhole(wholeFrom, slots.area[s]);
-        // The flagged radii that may cut it lie above a lower bound of its distance: that of
-        // its bounding sphere, or (nearest corner)² − ρ_t² (exact.cpp, VertexBall); a clip
-        // gives 0 where the sphere passes it by.
-        const double rho = slots.radius[s];
-        const double low2 = std::max(std::min({q2[0], q2[1], q2[2]}) - rho * rho, near * near);
-        for (std::size_t k = mSums.firstAbove(low2); k < wholeFrom; ++k) queue(q, k);
+        // A triangle that no flagged sphere cuts adds its area from `whole` on (none beyond
+        // the last: slot n, unused): in sums of the run, which hold 64 triangles inside a ball
+        // of radius R (each at most 1.3 R²). Unsigned, so that slot n may wrap.
+        std::uint64_t* runWhole = mRunWhole.data();
+        std::fill(runWhole + below, runWhole + upTo + 1, 0);
+        std::uint32_t cut[kChunk];
+        std::size_t cuts = 0;
+        for (std::size_t j = 0; j < m; ++j) {
+            const bool settled = first[j] == whole[j];
+            runWhole[whole[j]] += settled ? std::uint64_t(slots.area[s0 + j]) : 0;
+            cut[cuts] = std::uint32_t(j);
+            cuts += settled ? 0 : 1;
+        }
+        // The others by their corners (exact.cpp, VertexBall): whole inside from the first
+        // flagged radius at or beyond the farthest corner on, and cut, perhaps, by those above
+        // a lower bound of its distance: that of its bounding sphere, or (nearest corner)² −
+        // ρ_t² (a clip gives 0 where the sphere passes it by). Both lie between the bounding
+        // sphere's counts, so again only the radii in [below, upTo) are compared.
+        double farthest2[kChunk], low2[kChunk];
+        for (std::size_t c = 0; c < cuts; ++c) {
+            const std::size_t j = cut[c];
+            const std::array<Vec3, 3>& corners = slots.corners[s0 + j];
+            double lo = INFINITY, hi = 0;
+            for (const Vec3& corner : corners) {
+                const double dx = corner.x - p.x, dy = corner.y - p.y, dz = corner.z - p.z, q2 = dx * dx + dy * dy + dz * dz;
+                lo = std::min(lo, q2), hi = std::max(hi, q2);
+            }
+            const double rho = slots.radius[s0 + j];
+            farthest2[c] = hi, low2[c] = std::max(lo - rho * rho, near2[j]);
+        }
+        std::int32_t wholeFrom[kChunk], cutFrom[kChunk];
+        for (std::size_t c = 0; c < cuts; ++c) wholeFrom[c] = std::int32_t(below), cutFrom[c] = std::int32_t(below);
+        for (std::size_t k = below; k < upTo; ++k) {
+            const double r2 = mSums.squaredRadius(k);
+            for (std::size_t c = 0; c < cuts; ++c) {
+                wholeFrom[c] += r2 < farthest2[c] ? 1 : 0;
+                cutFrom[c] += r2 <= low2[c] ? 1 : 0;
+            }
+        }
+        for (std::size_t c = 0; c < cuts; ++c) runWhole[wholeFrom[c]] += std::uint64_t(slots.area[s0 + cut[c]]);
+        for (std::size_t k = below; k < std::min(upTo + 1, n); ++k)
+            if (runWhole[k] != 0) mSums.addWhole(k, Fixed(std::int64_t(runWhole[k])));
+        for (std::size_t c = 0; c < cuts; ++c) {
+            if (cutFrom[c] >= wholeFrom[c]) continue;
+            const std::array<Vec3, 3>& corners = slots.corners[s0 + cut[c]];
+            const std::array<Vec3, 3> q{corners[0] - p, corners[1] - p, corners[2] - p};
+            for (std::int32_t k = cutFrom[c]; k < wholeFrom[c]; ++k) queue(q, std::size_t(k));
+        }
     }
 
     /// Queues the clip of the triangle @p q (corners relative to p) by flagged radius k.
@@ -631,6 +668,7 @@ private:
 
     FlaggedSums& mSums;
     ClipBatch mBatch;
+    std::vector<std::uint64_t> mRunWhole;  ///< addTriangles's sums of areas per flagged radius, and beyond
 };
 
 } // namespace
