@@ -151,7 +151,10 @@ public:
     struct Slots {
         std::vector<double> x, y, z, radius;
         std::vector<std::int64_t> area;
-        std::vector<std::array<Vec3, 3>> corners;  ///< the triangle's, in the slot's order (no indirection)
+        /// The triangle's corners, coordinate by coordinate: corner[3 · c + a] holds axis a of
+        /// corner c (loops over a run of slots vectorise).
+        std::array<std::vector<double>, 9> corner;
+        Vec3 at(std::size_t s, int c) const { return {corner[3 * c][s], corner[3 * c + 1][s], corner[3 * c + 2][s]}; }
     };
 
     /// The triangles @p triangles of @p mesh (with @p frames) in cells of edge @p cellSize.
@@ -185,13 +188,15 @@ public:
         tbb::parallel_sort(keyed.begin(), keyed.end());
         const std::size_t n = keyed.size();
         mSlots.x.resize(n), mSlots.y.resize(n), mSlots.z.resize(n), mSlots.radius.resize(n);
-        mSlots.area.resize(n), mSlots.corners.resize(n);
+        mSlots.area.resize(n);
+        for (std::vector<double>& axis : mSlots.corner) axis.resize(n);
         for (std::size_t s = 0; s < n; ++s) {
             const std::uint32_t t = keyed[s].second;
             const TriangleFrame& f = frames[t];
             mSlots.x[s] = f.centroid.x, mSlots.y[s] = f.centroid.y, mSlots.z[s] = f.centroid.z;
             mSlots.radius[s] = f.boundingRadius;
-            for (int c = 0; c < 3; ++c) mSlots.corners[s][c] = mesh.points[mesh.triangles[t][c]];
+            for (int c = 0; c < 3; ++c)
+                for (int a = 0; a < 3; ++a) mSlots.corner[std::size_t(3 * c + a)][s] = mesh.points[mesh.triangles[t][c]][a];
             mSlots.area[s] = std::int64_t(units.areaUnits(f.area));
             if (s == 0 || keyed[s].first != keyed[s - 1].first) {
                 if (s == 0 || keyed[s].first >> 6 != keyed[s - 1].first >> 6) {
@@ -211,7 +216,7 @@ public:
                 for (std::uint32_t c = mBlocks[b].first; c < mBlocks[b].last; ++c) {
                     Box& cell = mCells[c];
                     for (std::uint32_t s = cell.first; s < cell.last; ++s)
-                        for (const Vec3& corner : mSlots.corners[s]) grow(cell, corner);
+                        for (int corner = 0; corner < 3; ++corner) grow(cell, mSlots.at(s, corner));
                     grow(mBlocks[b], cell.lo), grow(mBlocks[b], cell.hi);
                     mBlocks[b].area += cell.area;
                 }
@@ -543,12 +548,14 @@ public:
         for (const CellGrid& grid : grids)
             grid.forEachBlockNear(p, reach, [&](const CellGrid::Box& block) {
                 if (settled(block)) return;
-                // Cut: its cells, and the triangles of those cut one by one.
-                for (std::uint32_t c = block.first; c < block.last; ++c) {
-                    const CellGrid::Box& cell = grid.cell(c);
-                    if (settled(cell)) continue;
-                    for (std::uint32_t s = cell.first; s < cell.last; s += kChunk)
-                        addTriangles(p, grid.slots(), s, std::min(cell.last, s + std::uint32_t(kChunk)), margin);
+                // Cut: its cells, and the triangles of those cut one by one, in runs of
+                // consecutive slots over consecutive cells.
+                std::uint32_t cut[kCellsPerBlock];
+                const std::size_t cuts = addCells(p, grid, block, margin, cut);
+                for (std::size_t c = 0; c < cuts;) {
+                    std::uint32_t s = grid.cell(cut[c]).first, end = grid.cell(cut[c]).last;
+                    for (++c; c < cuts && cut[c] == cut[c - 1] + 1; ++c) end = grid.cell(cut[c]).last;
+                    for (; s < end; s += kChunk) addTriangles(p, grid.slots(), s, std::min(end, s + std::uint32_t(kChunk)), margin);
                 }
             });
         flush();
@@ -556,84 +563,114 @@ public:
 
 private:
     static constexpr std::size_t kChunk = 64;
+    static constexpr std::size_t kCellsPerBlock = 64;
+    static constexpr double kBeyond = std::numeric_limits<double>::max();
 
-    /// Adds the triangles of slots [@p s0, @p s1) (at most kChunk): as the exact mode's
-    /// VertexBall (exact.cpp), at the flagged radii. Their bounding spheres first, all
-    /// together (loops that vectorise): where no flagged sphere comes near one, it is whole
-    /// inside from one radius on, or beyond reach, without its corners.
-    void addTriangles(const Vec3& p, const CellGrid::Slots& slots, std::uint32_t s0, std::uint32_t s1, double margin)
+    /// The cells of @p block: each either settled (beyond reach, or whole inside from one
+    /// flagged radius on, added whole) or cut by a flagged sphere, into @p cut (ascending).
+    /// As the boxes of run() (the same margins), all cells together in loops that vectorise;
+    /// returns the number cut.
+    std::size_t addCells(const Vec3& p, const CellGrid& grid, const CellGrid::Box& block, double margin,
+                         std::uint32_t (&cut)[kCellsPerBlock])
     {
-        const std::size_t m = s1 - s0;
-        double near2[kChunk], far2[kChunk];
+        const std::uint32_t c0 = block.first;
+        const std::size_t m = block.last - block.first;
+        const double reach = mSums.largestRadius();
+        double near2[kCellsPerBlock], far2[kCellsPerBlock];
         double lowest = INFINITY, highest = 0;
         for (std::size_t j = 0; j < m; ++j) {
-            const double dx = slots.x[s0 + j] - p.x, dy = slots.y[s0 + j] - p.y, dz = slots.z[s0 + j] - p.z;
-            const double centre = std::sqrt(dx * dx + dy * dy + dz * dz), rho = slots.radius[s0 + j];
-            const double lo = std::max(0.0, centre - rho - margin), hi = centre + rho + margin;
-            near2[j] = lo * lo, far2[j] = hi * hi;
-            lowest = std::min(lowest, lo * lo), highest = std::max(highest, hi * hi);
+            const CellGrid::Box& box = grid.cell(c0 + std::uint32_t(j));
+            double n2 = 0, f2 = 0;
+            for (int a = 0; a < 3; ++a) {
+                const double below = box.lo[a] - p[a], above = p[a] - box.hi[a];
+                const double gap = std::max(std::max(below, above), 0.0);
+                n2 += gap * gap;
+                const double far = std::max(std::abs(box.lo[a] - p[a]), std::abs(box.hi[a] - p[a]));
+                f2 += far * far;
+            }
+            const double near = std::sqrt(n2), far = std::sqrt(f2);
+            // Beyond reach: every radius below it, settled, as settled() has it (the largest
+            // double, not +∞, which the counts would step past).
+            const double nearBelow = std::max(0.0, near - margin), farAbove = far + margin;
+            const bool beyond = near >= reach;
+            near2[j] = beyond ? kBeyond : nearBelow * nearBelow, far2[j] = beyond ? kBeyond : farAbove * farAbove;
+            lowest = std::min(lowest, near2[j]), highest = std::max(highest, far2[j]);
         }
-        // Per triangle, the first flagged radius above its nearest point (first) and the
-        // first at or beyond its farthest (whole), as counts of the radii² below: every
-        // triangle of the run counts the radii below the run's nearest point, and none those
-        // at or beyond its farthest, so that only the few radii between are compared.
         const std::size_t n = mSums.size(), below = mSums.firstAbove(lowest), upTo = mSums.firstAtLeast(highest);
-        std::int32_t first[kChunk], whole[kChunk];
-        for (std::size_t j = 0; j < m; ++j) first[j] = std::int32_t(below), whole[j] = std::int32_t(below);
+        std::int32_t first[kCellsPerBlock], inside[kCellsPerBlock];
+        for (std::size_t j = 0; j < m; ++j) first[j] = std::int32_t(below), inside[j] = std::int32_t(below);
         for (std::size_t k = below; k < upTo; ++k) {
             const double r2 = mSums.squaredRadius(k);
             for (std::size_t j = 0; j < m; ++j) {
                 first[j] += r2 <= near2[j] ? 1 : 0;
-                whole[j] += r2 < far2[j] ? 1 : 0;
+                inside[j] += r2 < far2[j] ? 1 : 0;
             }
         }
-        // A triangle that no flagged sphere cuts adds its area from `whole` on (none beyond
-        // the last: slot n, unused): in sums of the run, which hold 64 triangles inside a ball
-        // of radius R (each at most 1.3 R²). Unsigned, so that slot n may wrap.
-        std::uint64_t* runWhole = mRunWhole.data();
-        std::fill(runWhole + below, runWhole + upTo + 1, 0);
-        std::uint32_t cut[kChunk];
         std::size_t cuts = 0;
         for (std::size_t j = 0; j < m; ++j) {
-            const bool settled = first[j] == whole[j];
-            runWhole[whole[j]] += settled ? std::uint64_t(slots.area[s0 + j]) : 0;
-            cut[cuts] = std::uint32_t(j);
-            cuts += settled ? 0 : 1;
+            if (first[j] == inside[j]) {
+                if (std::size_t(inside[j]) < n) mSums.addWhole(std::size_t(inside[j]), grid.cell(c0 + std::uint32_t(j)).area);
+                continue;
+            }
+            cut[cuts++] = c0 + std::uint32_t(j);
         }
-        // The others by their corners (exact.cpp, VertexBall): whole inside from the first
-        // flagged radius at or beyond the farthest corner on, and cut, perhaps, by those above
-        // a lower bound of its distance: that of its bounding sphere, or (nearest corner)² −
-        // ρ_t² (a clip gives 0 where the sphere passes it by). Both lie between the bounding
-        // sphere's counts, so again only the radii in [below, upTo) are compared.
-        double farthest2[kChunk], low2[kChunk];
-        for (std::size_t c = 0; c < cuts; ++c) {
-            const std::size_t j = cut[c];
-            const std::array<Vec3, 3>& corners = slots.corners[s0 + j];
+        return cuts;
+    }
+
+    /// Adds the triangles of slots [@p s0, @p s1) (at most kChunk): as the exact mode's
+    /// VertexBall (exact.cpp), at the flagged radii, all together in loops that vectorise.
+    /// A triangle is whole inside from the first flagged radius at or beyond its farthest
+    /// corner on, and cut, perhaps, by those above a lower bound of its distance: that of
+    /// its bounding sphere (less a margin, as the boxes of run()), or (nearest corner)² − ρ_t²;
+    /// a clip gives 0 where the sphere passes it by.
+    void addTriangles(const Vec3& p, const CellGrid::Slots& slots, std::uint32_t s0, std::uint32_t s1, double margin)
+    {
+        const std::size_t m = s1 - s0;
+        double low2[kChunk], farthest2[kChunk];
+        double lowest = INFINITY, highest = 0;
+        const double* cx[3] = {slots.corner[0].data() + s0, slots.corner[3].data() + s0, slots.corner[6].data() + s0};
+        const double* cy[3] = {slots.corner[1].data() + s0, slots.corner[4].data() + s0, slots.corner[7].data() + s0};
+        const double* cz[3] = {slots.corner[2].data() + s0, slots.corner[5].data() + s0, slots.corner[8].data() + s0};
+        for (std::size_t j = 0; j < m; ++j) {
+            const double dx = slots.x[s0 + j] - p.x, dy = slots.y[s0 + j] - p.y, dz = slots.z[s0 + j] - p.z;
+            const double centre = std::sqrt(dx * dx + dy * dy + dz * dz), rho = slots.radius[s0 + j];
+            const double near = std::max(0.0, centre - rho - margin);
             double lo = INFINITY, hi = 0;
-            for (const Vec3& corner : corners) {
-                const double dx = corner.x - p.x, dy = corner.y - p.y, dz = corner.z - p.z, q2 = dx * dx + dy * dy + dz * dz;
+            for (int c = 0; c < 3; ++c) {
+                const double qx = cx[c][j] - p.x, qy = cy[c][j] - p.y, qz = cz[c][j] - p.z;
+                const double q2 = qx * qx + qy * qy + qz * qz;
                 lo = std::min(lo, q2), hi = std::max(hi, q2);
             }
-            const double rho = slots.radius[s0 + j];
-            farthest2[c] = hi, low2[c] = std::max(lo - rho * rho, near2[j]);
+            low2[j] = std::max(lo - rho * rho, near * near), farthest2[j] = hi;
+            lowest = std::min(lowest, low2[j]), highest = std::max(highest, hi);
         }
-        std::int32_t wholeFrom[kChunk], cutFrom[kChunk];
-        for (std::size_t c = 0; c < cuts; ++c) wholeFrom[c] = std::int32_t(below), cutFrom[c] = std::int32_t(below);
+        // The counts of flagged radii² at or below low2 (cutFrom) and below farthest2
+        // (wholeFrom): every triangle of the run counts the radii at or below the run's
+        // lowest low2, and none at or beyond its highest farthest2, so that only the few
+        // radii between are compared.
+        const std::size_t n = mSums.size(), below = mSums.firstAbove(lowest), upTo = mSums.firstAtLeast(highest);
+        std::int32_t cutFrom[kChunk], wholeFrom[kChunk];
+        for (std::size_t j = 0; j < m; ++j) cutFrom[j] = std::int32_t(below), wholeFrom[j] = std::int32_t(below);
         for (std::size_t k = below; k < upTo; ++k) {
             const double r2 = mSums.squaredRadius(k);
-            for (std::size_t c = 0; c < cuts; ++c) {
-                wholeFrom[c] += r2 < farthest2[c] ? 1 : 0;
-                cutFrom[c] += r2 <= low2[c] ? 1 : 0;
+            for (std::size_t j = 0; j < m; ++j) {
+                cutFrom[j] += r2 <= low2[j] ? 1 : 0;
+                wholeFrom[j] += r2 < farthest2[j] ? 1 : 0;
             }
         }
-        for (std::size_t c = 0; c < cuts; ++c) runWhole[wholeFrom[c]] += std::uint64_t(slots.area[s0 + cut[c]]);
+        // The areas whole inside, in sums of the run (64 triangles inside a ball of radius R,
+        // each at most 1.3 R², fit 64 bits); beyond the last flagged radius, slot n, unused
+        // (unsigned, so that it may wrap).
+        std::uint64_t* runWhole = mRunWhole.data();
+        std::fill(runWhole + below, runWhole + upTo + 1, 0);
+        for (std::size_t j = 0; j < m; ++j) runWhole[wholeFrom[j]] += std::uint64_t(slots.area[s0 + j]);
         for (std::size_t k = below; k < std::min(upTo + 1, n); ++k)
             if (runWhole[k] != 0) mSums.addWhole(k, Fixed(std::int64_t(runWhole[k])));
-        for (std::size_t c = 0; c < cuts; ++c) {
-            if (cutFrom[c] >= wholeFrom[c]) continue;
-            const std::array<Vec3, 3>& corners = slots.corners[s0 + cut[c]];
-            const std::array<Vec3, 3> q{corners[0] - p, corners[1] - p, corners[2] - p};
-            for (std::int32_t k = cutFrom[c]; k < wholeFrom[c]; ++k) queue(q, std::size_t(k));
+        for (std::size_t j = 0; j < m; ++j) {
+            if (cutFrom[j] >= wholeFrom[j]) continue;
+            const std::size_t s = s0 + j;
+            const std::array<Vec3, 3> q{slots.at(s, 0) - p, slots.at(s, 1) - p, slots.at(s, 2) - p};
+            for (std::int32_t k = cutFrom[j]; k < wholeFrom[j]; ++k) queue(q, std::size_t(k));
         }
     }
 
