@@ -212,7 +212,8 @@ std::size_t evaluateAtSamples(const Level& level, const LevelRadii& radii, doubl
     KernelSums sums;
     std::vector<Vec3> at(numSamples);
     for (std::size_t s = 0; s < numSamples; ++s) at[s] = Vec3(level.cx[s], level.cy[s], level.cz[s]);
-    evaluatePoints(level, radii.kernel, h0, at, std::vector<char>(numSamples, 0), sums, progress);
+    // Only the samples some vertex's fit reads (not those of a continuation beyond them).
+    evaluatePoints(level, radii.kernel, h0, at, samplesBeyondFit(level, h0, mesh.points, skip), sums, progress);
     checkCpuSeconds += sums.checkCpuSeconds;
     if (vertexNormal.empty()) vertexNormal = vertexNormals(mesh, Vec3(0, 0, 1));
     // Every field of the sums (P, L, and the check's) is fitted to the vertices alike.

@@ -6,9 +6,11 @@
 #include <tbb/parallel_for.h>
 
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace msii::detail {
@@ -57,7 +59,47 @@ void fitResiduals(const double m[3][3], double det, const std::vector<std::uint3
     }
 }
 
+/// The samples within the fit's window of the 2^kFitGroupBits-cell box of the group of
+/// points whose first point lies in @p c0 (cells of @p level): @p visit(s), with the box's
+/// squared distance test of the window (2h) as interpolateFromSamples makes it.
+template <class Visit>
+void forEachSampleNearGroup(const Level& level, const CellCoord& c0, Visit&& visit)
+{
+    const std::int64_t groupCells = std::int64_t(1) << kFitGroupBits;
+    const double h = level.h, radius2 = 4.0 * h * h, groupSide = double(groupCells) * h;
+    const std::array<double, 6> groupBox{0, 0, 0, groupSide, groupSide, groupSide};  // about (ox, oy, oz)
+    const std::int64_t gx = c0.x & ~(groupCells - 1), gy = c0.y & ~(groupCells - 1), gz = c0.z & ~(groupCells - 1);
+    // Samples within 2h of the group's box: at most 2 cells beyond it.
+    const std::int64_t lo[3] = {gx - 2, gy - 2, gz - 2}, hi[3] = {gx + groupCells + 1, gy + groupCells + 1, gz + groupCells + 1};
+    const double ox = double(gx - (kOffset >> level.index)) * h, oy = double(gy - (kOffset >> level.index)) * h,
+                 oz = double(gz - (kOffset >> level.index)) * h;
+    forEachSampleInCells(level, lo, hi, [&](std::uint32_t s) {
+        if (squaredDistanceToBox(level.cx[s] - ox, level.cy[s] - oy, level.cz[s] - oz, groupBox) < radius2) visit(s);
+    });
+}
+
 } // namespace
+
+std::vector<char> samplesBeyondFit(const Level& level, double h0, const std::vector<Vec3>& p,
+                                   const std::vector<char>& skip)
+{
+    const std::size_t ns = level.cx.size();
+    const CellGroups groups = groupByCells(p, h0, level.index, kFitGroupBits);
+    // Marked from several groups at once: atomic bytes, set to 1 only.
+    const std::unique_ptr<std::atomic<std::uint8_t>[]> near(new std::atomic<std::uint8_t>[ns]());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups.start.size() - 1), [&](const auto& range) {
+        for (std::size_t g = range.begin(); g < range.end(); ++g) {
+            bool any = false;
+            for (std::size_t q = groups.start[g]; q < groups.start[g + 1] && !any; ++q) any = !skip[groups.order[q].second];
+            if (!any) continue;
+            forEachSampleNearGroup(level, groups.cell[groups.order[groups.start[g]].second],
+                                   [&](std::uint32_t s) { near[s].store(1, std::memory_order_relaxed); });
+        }
+    });
+    std::vector<char> beyond(ns);
+    for (std::size_t s = 0; s < ns; ++s) beyond[s] = near[s].load(std::memory_order_relaxed) ? 0 : 1;
+    return beyond;
+}
 
 void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec3>& p,
                             const std::vector<Vec3>& n, const std::vector<char>& skip,
@@ -68,9 +110,6 @@ void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec
     unresolved.assign(p.size(), 0);
     const double h = level.h, radius2 = 4.0 * h * h;
     const CellGroups groups = groupByCells(p, h0, level.index, kFitGroupBits);
-    const std::int64_t groupCells = std::int64_t(1) << kFitGroupBits;
-    const double groupSide = double(groupCells) * h;
-    const std::array<double, 6> groupBox{0, 0, 0, groupSide, groupSide, groupSide};  // about (ox, oy, oz)
     const auto& order = groups.order;
     const auto& groupStart = groups.start;
 
@@ -83,20 +122,8 @@ void interpolateFromSamples(const Level& level, double h0, const std::vector<Vec
         std::vector<double> weight;
         std::vector<std::array<double, 3>> basis;
         for (std::size_t g = range.begin(); g < range.end(); ++g) {
-            const CellCoord& c0 = groups.cell[order[groupStart[g]].second];
-            const std::int64_t gx = c0.x & ~(groupCells - 1), gy = c0.y & ~(groupCells - 1),
-                               gz = c0.z & ~(groupCells - 1);
             near.clear();
-            // Samples within 2h of the group's box: at most 2 cells beyond it.
-            const std::int64_t lo[3] = {gx - 2, gy - 2, gz - 2},
-                               hi[3] = {gx + groupCells + 1, gy + groupCells + 1, gz + groupCells + 1};
-            const double ox = double(gx - (kOffset >> level.index)) * h,
-                         oy = double(gy - (kOffset >> level.index)) * h,
-                         oz = double(gz - (kOffset >> level.index)) * h;
-            forEachSampleInCells(level, lo, hi, [&](std::uint32_t s) {
-                if (squaredDistanceToBox(level.cx[s] - ox, level.cy[s] - oy, level.cz[s] - oz, groupBox) < radius2)
-                    near.push_back(s);
-            });
+            forEachSampleNearGroup(level, groups.cell[order[groupStart[g]].second], [&](std::uint32_t s) { near.push_back(s); });
             nearX.resize(near.size()), nearY.resize(near.size()), nearZ.resize(near.size());
             for (auto& t : nearT) t.resize(near.size());
             for (std::size_t k = 0; k < near.size(); ++k) {

@@ -21,6 +21,13 @@ namespace msii::detail {
 /// the smallest change of the mesh would flip the route.
 constexpr double kDirectCellsPerSpacing = 1.2;
 
+/// Per sample of @p level, 1 where no point of @p p without @p skip lies within the fit's
+/// window (2h) of it, so that interpolateFromSamples reads no value of it, else 0 (a few more
+/// are kept: those within 2h of a group of points' box). On a mesh continued past its
+/// borders, the continuation's samples beyond the surface's vertices need no evaluation.
+std::vector<char> samplesBeyondFit(const Level& level, double h0, const std::vector<Vec3>& p,
+                                   const std::vector<char>& skip);
+
 /// Interpolates fields given at the samples of @p level (values[k·numSamples + s], k <
 /// numFields) to the points @p p with normals @p n (out[k·n + i]; points with @p skip set
 /// are left alone): a linear fit in the tangent plane (value and two slopes) over the
