@@ -464,8 +464,8 @@ std::vector<FloatTree::Ptr> occupancyPyramid(const LevelSet& levelSet, const Lev
 }
 
 /// The voxel centres of one level that the vertices need: the 8 corners of the level's cell
-/// around each vertex, numbered in a tree (value: the node's number), with each vertex's
-/// cell corner and position inside the cell.
+/// around each @p active vertex, numbered in a tree (value: the node's number), with each
+/// vertex's cell corner and position inside the cell.
 struct LevelNodes {
     std::vector<Coord> base;                 ///< per vertex: the cell's lowest corner
     std::vector<std::array<float, 3>> frac;  ///< per vertex: position in the cell, 0..1
@@ -474,7 +474,8 @@ struct LevelNodes {
     std::int32_t numNodes = 0;
 };
 
-LevelNodes levelNodes(const std::vector<openvdb::Vec3d>& globalIndex, int level, const Coord& shiftCoord)
+LevelNodes levelNodes(const std::vector<openvdb::Vec3d>& globalIndex, int level, const Coord& shiftCoord,
+                      const std::vector<char>& active)
 {
     const std::size_t nv = globalIndex.size();
     LevelNodes ln;
@@ -498,9 +499,11 @@ LevelNodes levelNodes(const std::vector<openvdb::Vec3d>& globalIndex, int level,
     });
     {
         openvdb::tree::ValueAccessor<Int32Tree> acc(nodes);
-        for (std::size_t i = 0; i < nv; ++i)
+        for (std::size_t i = 0; i < nv; ++i) {
+            if (!active[i]) continue;
             for (int c = 0; c < 8; ++c)  // value: a vertex next to the voxel centre
                 acc.setValueOn(base[i].offsetBy(c & 1, (c >> 1) & 1, c >> 2), std::int32_t(i));
+        }
     }
     std::vector<Int32Tree::LeafNodeType*> blocks;
     nodes.getNodes(blocks);
@@ -632,7 +635,8 @@ NodeValues stencilSums(LevelNodes& ln, const FloatTree& occ, const Stencil& sten
 /// Step 4 of the file comment: back to the vertices, at the level's radii.
 void interpolateToVertices(const TriMesh& mesh, const LevelSet& levelSet, const LevelNodes& ln, const NodeValues& values,
                            const std::vector<int>& levelRadii, const std::vector<double>& radii, int level,
-                           const VolumeSphereOptions& options, VolumeSphereResult& result)
+                           const std::vector<char>& active, const VolumeSphereOptions& options,
+                           VolumeSphereResult& result)
 {
     const std::size_t nv = mesh.numVertices();
     const double h0 = levelSetImpl(levelSet).grid->voxelSize()[0];
@@ -660,6 +664,7 @@ void interpolateToVertices(const TriMesh& mesh, const LevelSet& levelSet, const 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
         openvdb::tree::ValueAccessor<const Int32Tree> acc(nodes);
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            if (!active[i]) continue;  // every radius of the level masked: no nodes
             const Vec3& n = distance.vertexNormal(i);
             std::array<std::int32_t, 8> idx;
             std::array<double, 8> w, along, tangential2;
@@ -755,15 +760,23 @@ VolumeSphereResult detail::computeVolumeSphereHere(const TriMesh& mesh, const Le
         std::vector<double> rho;
         for (int j : levelRadii) rho.push_back(radii[std::size_t(j)] / hl);
 
+        // The vertices with a value at a radius of the level: those whose smallest radius of
+        // it is not masked (interpolateToVertices), the others need no nodes (a mesh continued
+        // past its borders: the continuation's vertices).
+        std::vector<char> active(nv, 1);
+        if (!options.borderDistance.empty()) {
+            const double margin = 4.0 * hl + 2.0 * h0, smallest = radii[std::size_t(levelRadii.front())];
+            for (std::size_t i = 0; i < nv; ++i) active[i] = smallest + margin > options.borderDistance[i] ? 0 : 1;
+        }
         stage.restart();
-        LevelNodes ln = levelNodes(globalIndex, level, shiftCoord);
+        LevelNodes ln = levelNodes(globalIndex, level, shiftCoord, active);
         result.numNodes += std::size_t(ln.numNodes);
         const NodeValues values = stencilSums(ln, *occupancy[std::size_t(level)], makeStencil(rho), levelSet, level,
                                               shiftCoord, options.computeSphere, progress);
         result.stencilSeconds += stage.seconds();
 
         stage.restart();
-        interpolateToVertices(mesh, levelSet, ln, values, levelRadii, radii, level, options, result);
+        interpolateToVertices(mesh, levelSet, ln, values, levelRadii, radii, level, active, options, result);
         result.interpolationSeconds += stage.seconds();
     }
 
