@@ -728,6 +728,30 @@ ExactPairsCount evaluatePairsExactly(const TriMesh& mesh, const std::vector<doub
         for (std::size_t i = 0; i < nv; ++i) count.pairs += flagged[j][i] != 0;
     count.vertices = vertices.size();
     if (vertices.empty() || mesh.numTriangles() == 0) return count;
+    // Walked in the order of their cells of edge R (Morton order), so that vertices walked
+    // one after another read mostly the same triangles (each vertex's sums are its own:
+    // the order changes no value).
+    {
+        const double R = radii.back();
+        Vec3 lo = mesh.points[vertices[0]];
+        for (const std::uint32_t v : vertices)
+            for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], mesh.points[v][a]);
+        const auto spread = [](std::uint64_t x) {  // 21 bits to every third bit
+            x &= 0x1fffff;
+            x = (x | x << 32) & 0x1f00000000ffffULL, x = (x | x << 16) & 0x1f0000ff0000ffULL;
+            x = (x | x << 8) & 0x100f00f00f00f00fULL, x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+            return (x | x << 2) & 0x1249249249249249ULL;
+        };
+        std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(vertices.size());
+        for (std::size_t k = 0; k < vertices.size(); ++k) {
+            std::uint64_t c[3];
+            for (int a = 0; a < 3; ++a)
+                c[a] = std::uint64_t(std::min(2097151.0, std::floor((mesh.points[vertices[k]][a] - lo[a]) / R)));
+            keyed[k] = {spread(c[0]) | spread(c[1]) << 1 | spread(c[2]) << 2, vertices[k]};
+        }
+        tbb::parallel_sort(keyed.begin(), keyed.end());
+        for (std::size_t k = 0; k < vertices.size(); ++k) vertices[k] = keyed[k].second;
+    }
 
     const FlaggedSums units(radii);
     const std::vector<TriangleFrame> frames = triangleFrames(mesh);
