@@ -63,8 +63,6 @@ public:
     }
 
     std::size_t size() const { return mFlagged.size(); }
-    /// r_k² of flagged radius k.
-    double squaredRadius(std::size_t k) const { return mSquared[k]; }
     double largestRadius() const { return mRadii[mFlagged.back()]; }
     double radius(std::size_t k) const { return mRadii[mFlagged[k]]; }
     /// The first flagged radius k with r_k² > @p x2 (size() if none).
@@ -80,6 +78,28 @@ public:
         std::size_t k = guess(x2);
         while (mSquared[k] < x2) ++k;
         return k;
+    }
+
+    /// For @p m items with nearest and farthest squared distances @p near2[j] <= @p far2[j]:
+    /// first[j] = firstAbove(near2[j]) and last[j] = firstAtLeast(far2[j]), as counts of the
+    /// radii² below. Every item counts the radii at or below the smallest near2, and none at
+    /// or beyond the largest far2, so that only the few radii between are compared (loops
+    /// that vectorise). Returns those bounds, {firstAbove(min near2), firstAtLeast(max far2)}.
+    std::pair<std::size_t, std::size_t> count(std::size_t m, const double* near2, const double* far2,
+                                              std::int32_t* first, std::int32_t* last) const
+    {
+        double lowest = INFINITY, highest = 0;  // (m >= 1)
+        for (std::size_t j = 0; j < m; ++j) lowest = std::min(lowest, near2[j]), highest = std::max(highest, far2[j]);
+        const std::size_t below = firstAbove(lowest), upTo = firstAtLeast(highest);
+        for (std::size_t j = 0; j < m; ++j) first[j] = std::int32_t(below), last[j] = std::int32_t(below);
+        for (std::size_t k = below; k < upTo; ++k) {
+            const double r2 = mSquared[k];
+            for (std::size_t j = 0; j < m; ++j) {
+                first[j] += r2 <= near2[j] ? 1 : 0;
+                last[j] += r2 < far2[j] ? 1 : 0;
+            }
+        }
+        return {below, upTo};
     }
 
     /// The fixed-point area of @p area.
@@ -577,7 +597,6 @@ private:
         const std::size_t m = block.last - block.first;
         const double reach = mSums.largestRadius();
         double near2[kCellsPerBlock], far2[kCellsPerBlock];
-        double lowest = INFINITY, highest = 0;
         for (std::size_t j = 0; j < m; ++j) {
             const CellGrid::Box& box = grid.cell(c0 + std::uint32_t(j));
             double n2 = 0, f2 = 0;
@@ -594,18 +613,10 @@ private:
             const double nearBelow = std::max(0.0, near - margin), farAbove = far + margin;
             const bool beyond = near >= reach;
             near2[j] = beyond ? kBeyond : nearBelow * nearBelow, far2[j] = beyond ? kBeyond : farAbove * farAbove;
-            lowest = std::min(lowest, near2[j]), highest = std::max(highest, far2[j]);
         }
-        const std::size_t n = mSums.size(), below = mSums.firstAbove(lowest), upTo = mSums.firstAtLeast(highest);
+        const std::size_t n = mSums.size();
         std::int32_t first[kCellsPerBlock], inside[kCellsPerBlock];
-        for (std::size_t j = 0; j < m; ++j) first[j] = std::int32_t(below), inside[j] = std::int32_t(below);
-        for (std::size_t k = below; k < upTo; ++k) {
-            const double r2 = mSums.squaredRadius(k);
-            for (std::size_t j = 0; j < m; ++j) {
-                first[j] += r2 <= near2[j] ? 1 : 0;
-                inside[j] += r2 < far2[j] ? 1 : 0;
-            }
-        }
+        mSums.count(m, near2, far2, first, inside);
         std::size_t cuts = 0;
         for (std::size_t j = 0; j < m; ++j) {
             if (first[j] == inside[j]) {
@@ -627,7 +638,6 @@ private:
     {
         const std::size_t m = s1 - s0;
         double low2[kChunk], farthest2[kChunk];
-        double lowest = INFINITY, highest = 0;
         const double* cx[3] = {slots.corner[0].data() + s0, slots.corner[3].data() + s0, slots.corner[6].data() + s0};
         const double* cy[3] = {slots.corner[1].data() + s0, slots.corner[4].data() + s0, slots.corner[7].data() + s0};
         const double* cz[3] = {slots.corner[2].data() + s0, slots.corner[5].data() + s0, slots.corner[8].data() + s0};
@@ -642,22 +652,11 @@ private:
                 lo = std::min(lo, q2), hi = std::max(hi, q2);
             }
             low2[j] = std::max(lo - rho * rho, near * near), farthest2[j] = hi;
-            lowest = std::min(lowest, low2[j]), highest = std::max(highest, hi);
         }
-        // The counts of flagged radii² at or below low2 (cutFrom) and below farthest2
-        // (wholeFrom): every triangle of the run counts the radii at or below the run's
-        // lowest low2, and none at or beyond its highest farthest2, so that only the few
-        // radii between are compared.
-        const std::size_t n = mSums.size(), below = mSums.firstAbove(lowest), upTo = mSums.firstAtLeast(highest);
+        // The first flagged radius above low2 (cutFrom) and at or beyond farthest2 (wholeFrom).
+        const std::size_t n = mSums.size();
         std::int32_t cutFrom[kChunk], wholeFrom[kChunk];
-        for (std::size_t j = 0; j < m; ++j) cutFrom[j] = std::int32_t(below), wholeFrom[j] = std::int32_t(below);
-        for (std::size_t k = below; k < upTo; ++k) {
-            const double r2 = mSums.squaredRadius(k);
-            for (std::size_t j = 0; j < m; ++j) {
-                cutFrom[j] += r2 <= low2[j] ? 1 : 0;
-                wholeFrom[j] += r2 < farthest2[j] ? 1 : 0;
-            }
-        }
+        const auto [below, upTo] = mSums.count(m, low2, farthest2, cutFrom, wholeFrom);
         // The areas whole inside, in sums of the run (64 triangles inside a ball of radius R,
         // each at most 1.3 R², fit 64 bits); beyond the last flagged radius, slot n, unused
         // (unsigned, so that it may wrap).

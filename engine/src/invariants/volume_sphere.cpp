@@ -632,6 +632,13 @@ NodeValues stencilSums(LevelNodes& ln, const FloatTree& occ, const Stencil& sten
     return out;
 }
 
+/// How much farther than r a border must be for a vertex's value at r on a level of cell
+/// @p hl: the stencil's reach and the interpolation's (4 cells), and 2 finest voxels.
+double maskMargin(double hl, double h0)
+{
+    return 4.0 * hl + 2.0 * h0;
+}
+
 /// Step 4 of the file comment: back to the vertices, at the level's radii.
 void interpolateToVertices(const TriMesh& mesh, const LevelSet& levelSet, const LevelNodes& ln, const NodeValues& values,
                            const std::vector<int>& levelRadii, const std::vector<double>& radii, int level,
@@ -659,7 +666,7 @@ void interpolateToVertices(const TriMesh& mesh, const LevelSet& levelSet, const 
     // would imply κ ≈ 1/h) must not be corrected as if they were smooth. The linear part
     // n·d vanishes at the vertex under trilinear interpolation, so n's error matters
     // only through the curvature term.
-    const double margin = 4.0 * hl + 2.0 * h0;
+    const double margin = maskMargin(hl, h0);
     const auto& distance = *levelSetImpl(levelSet).distance;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
         openvdb::tree::ValueAccessor<const Int32Tree> acc(nodes);
@@ -765,7 +772,7 @@ VolumeSphereResult detail::computeVolumeSphereHere(const TriMesh& mesh, const Le
         // past its borders: the continuation's vertices).
         std::vector<char> active(nv, 1);
         if (!options.borderDistance.empty()) {
-            const double margin = 4.0 * hl + 2.0 * h0, smallest = radii[std::size_t(levelRadii.front())];
+            const double margin = maskMargin(hl, h0), smallest = radii[std::size_t(levelRadii.front())];
             for (std::size_t i = 0; i < nv; ++i) active[i] = smallest + margin > options.borderDistance[i] ? 0 : 1;
         }
         stage.restart();
