@@ -514,3 +514,66 @@ TEST(PrepareMesh, FillHolesZeroFillsNone)
     EXPECT_EQ(r.mesh.numTriangles(), m.numTriangles());
     EXPECT_FALSE(checkMesh(r.mesh).closed);
 }
+
+// filled_share against its closed form: a plane whose half x > 0 is fill. At a vertex a
+// distance d from the line x = 0, the ball of radius R meets the fill in a circular segment
+// (on the surface's side) or in the disc less one (on the fill's side). The plane
+// is large (lines at ±4R), tilted and far from the origin, and its grid is jittered, as a
+// scan's would be; the pieces of R/16 take the areas to within a few thousandths.
+TEST(PrepareMesh, FillShareOfAHalfPlaneIsTheDiscSegment)
+{
+    const double R = 1.3, step = 0.11;
+    const int n = int(std::ceil(4 * R / step));
+    const Vec3 origin{3.1e5, 5.4e6, 412.0}, u = normalized(Vec3{1, 0, 0.3}), tilt{0, 1, -0.2};
+    const Vec3 w = normalized(tilt - u * dot(u, tilt));
+    std::uint32_t seed = 11;
+    const auto jitter = [&] {
+        seed = seed * 1664525u + 1013904223u;
+        return (double(seed >> 8) / double(1u << 24) - 0.5) * 0.3 * step;
+    };
+    // Columns x = i·step for i in [-n, n]; jitter along the line only, so that x = 0 stays
+    // the border between the surface and the fill.
+    TriMesh mesh;
+    const int side = 2 * n + 1;
+    std::vector<double> xs;
+    for (int i = -n; i <= n; ++i)
+        for (int j = -n; j <= n; ++j) {
+            const double x = i * step + (i == 0 ? 0.0 : jitter()), y = j * step + jitter();
+            xs.push_back(x);
+            mesh.points.push_back(origin + u * x + w * y);
+        }
+    std::vector<Triangle> surface, fill;
+    for (int i = 0; i + 1 < side; ++i)
+        for (int j = 0; j + 1 < side; ++j) {
+            const auto at = [&](int a, int b) { return std::uint32_t(a * side + b); };
+            auto& to = i - n >= 0 ? fill : surface;  // columns i - n, i - n + 1
+            to.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+            to.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+        }
+    mesh.triangles = surface;
+    mesh.triangles.insert(mesh.triangles.end(), fill.begin(), fill.end());
+    const std::vector<float> share = fillShare(mesh, surface.size(), R);
+    ASSERT_EQ(share.size(), mesh.numVertices());
+
+    const auto segment = [&](double d) {  // the disc's part beyond the line at distance d
+        return (R * R * std::acos(d / R) - d * std::sqrt(R * R - d * d)) / (M_PI * R * R);
+    };
+    double largest = 0;
+    std::size_t compared = 0;
+    for (int i = -n; i <= n; ++i)
+        for (int j = -n; j <= n; ++j) {
+            const std::size_t v = std::size_t((i + n) * side + (j + n));
+            const double x = xs[v], y = dot(mesh.points[v] - origin, w);
+            if (std::abs(y) > 4 * R - R - 2 * step) continue;  // its ball would leave the plane
+            if (std::abs(x) > 4 * R - R - 2 * step) continue;
+            const double want = x >= R ? 1.0 : x <= -R ? 0.0 : x >= 0 ? 1.0 - segment(x) : segment(-x);
+            largest = std::max(largest, std::abs(double(share[v]) - want));
+            ++compared;
+        }
+    std::printf("filled_share on a half plane of fill: %zu vertices, largest difference %.2e\n", compared, largest);
+    EXPECT_GT(compared, 500u);
+    EXPECT_LE(largest, 5e-3);
+    // Only the vertices asked for get a share.
+    const std::vector<float> some = fillShare(mesh, surface.size(), R, 10);
+    for (std::size_t v = 10; v < some.size(); ++v) ASSERT_EQ(some[v], 0.0f);
+}
