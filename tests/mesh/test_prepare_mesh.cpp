@@ -576,4 +576,23 @@ TEST(PrepareMesh, FillShareOfAHalfPlaneIsTheDiscSegment)
     // Only the vertices asked for get a share.
     const std::vector<float> some = fillShare(mesh, surface.size(), R, 10);
     for (std::size_t v = 10; v < some.size(); ++v) ASSERT_EQ(some[v], 0.0f);
+
+    // A second copy 2^21 R away, where the cells' keys of the two copies coincide: each
+    // copy keeps its own shares (the first bit for bit, the copy within rounding).
+    TriMesh twice;
+    const std::size_t nv = mesh.numVertices();
+    const Vec3 shift{std::ldexp(R, 21), 0, 0};
+    twice.points = mesh.points;
+    for (const Vec3& q : mesh.points) twice.points.push_back(q + shift);
+    const auto copy = [&](const std::vector<Triangle>& from, std::uint32_t offset) {
+        for (const Triangle& t : from) twice.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    };
+    copy(surface, 0), copy(surface, std::uint32_t(nv)), copy(fill, 0), copy(fill, std::uint32_t(nv));
+    const std::vector<float> both = fillShare(twice, 2 * surface.size(), R);
+    double largestCopy = 0;
+    for (std::size_t v = 0; v < nv; ++v) {
+        ASSERT_EQ(both[v], share[v]) << "vertex " << v;
+        largestCopy = std::max(largestCopy, double(std::abs(both[nv + v] - share[v])));
+    }
+    EXPECT_LE(largestCopy, 1e-3);
 }

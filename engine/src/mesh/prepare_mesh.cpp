@@ -309,6 +309,7 @@ std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double 
     for (std::size_t i = 0; i < pieces.size(); ++i) byCell[keyOf(cellOf(pieces[i].at))].push_back(std::uint32_t(i));
     struct CellPieces {
         std::array<std::int64_t, 3> cell;
+        Vec3 lo, hi;  // the box of its pieces
         std::size_t begin, end;
     };
     std::unordered_map<std::uint64_t, CellPieces> cells;
@@ -322,8 +323,11 @@ std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double 
     for (const auto& [key, list] : byCell) {
         CellPieces& c = cells[key];
         c.cell = cellOf(pieces[list.front()].at);
+        c.lo = c.hi = pieces[list.front()].at;
         c.begin = px.size();
         for (std::uint32_t i : list) {
+            for (int a = 0; a < 3; ++a)
+                c.lo[a] = std::min(c.lo[a], pieces[i].at[a]), c.hi[a] = std::max(c.hi[a], pieces[i].at[a]);
             px.push_back(pieces[i].at.x);
             py.push_back(pieces[i].at.y);
             pz.push_back(pieces[i].at.z);
@@ -339,8 +343,9 @@ std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double 
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dz = -1; dz <= 1; ++dz) reached.insert(keyOf({c.cell[0] + dx, c.cell[1] + dy, c.cell[2] + dz}));
     const double r2 = radius * radius;
-    // A cell is skipped where its box, widened by a millionth of R for the rounding of
-    // floor(p / R), is farther than R from the vertex.
+    // A cell is skipped where the box of its pieces, widened by a millionth of R against
+    // rounding, is farther than R from the vertex. (The box, not the cell's bounds: cells
+    // 2^21 apart share a key, and their pieces one list.)
     const double slack = 1e-6 * radius;
     std::vector<float> share(mesh.numVertices(), 0.0f);
     forEachBlock(wanted, [&](std::size_t, std::size_t begin, std::size_t end) {
@@ -357,8 +362,7 @@ std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double 
                         const CellPieces& cp = it->second;
                         double gap2 = 0;
                         for (int a = 0; a < 3; ++a) {
-                            const double lo = double(cp.cell[a]) * radius - slack, hi = double(cp.cell[a] + 1) * radius + slack;
-                            const double q = a == 0 ? p.x : a == 1 ? p.y : p.z;
+                            const double lo = cp.lo[a] - slack, hi = cp.hi[a] + slack, q = p[a];
                             const double gap = q < lo ? lo - q : q > hi ? q - hi : 0.0;
                             gap2 += gap * gap;
                         }
