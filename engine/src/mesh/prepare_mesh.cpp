@@ -316,9 +316,9 @@ std::vector<float> fillShare(const TriMesh& mesh, std::size_t firstFill, double 
     std::vector<double> px, py, pz;
     std::vector<std::int64_t> weight;
     // Areas in whole units of 2^-40 πR², summed as integers: the sum is exact whatever its
-    // order (a vertex's sum does not depend on how the pieces are grouped, tiles keep one
-    // piece's values bit for bit), and rounding a piece to the unit changes a share by at most
-    // 2^-41 per piece, far below a float's step.
+    // order (a vertex's sum does not depend on how the pieces are grouped, and tiles give
+    // the untiled run's shares bit for bit), and rounding a piece to the unit changes a
+    // share by at most 2^-41 per piece, far below a float's step.
     const double unit = std::ldexp(M_PI * radius * radius, -40);
     for (const auto& [key, list] : byCell) {
         CellPieces& c = cells[key];
