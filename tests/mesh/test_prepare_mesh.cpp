@@ -531,8 +531,8 @@ TEST(PrepareMesh, FillShareOfAHalfPlaneIsTheDiscSegment)
         seed = seed * 1664525u + 1013904223u;
         return (double(seed >> 8) / double(1u << 24) - 0.5) * 0.3 * step;
     };
-    // Columns x = i·step for i in [-n, n]; jitter along the line only, so that x = 0 stays
-    // the border between the surface and the fill.
+    // Columns x = i·step for i in [-n, n], jittered both ways except column 0 across the
+    // line, so that x = 0 stays the border between the surface and the fill.
     TriMesh mesh;
     const int side = 2 * n + 1;
     std::vector<double> xs;

@@ -1,6 +1,7 @@
 #include "patch_line_exact.h"
 
 #include "exact_triangles.h"
+#include "patch_line_samples.h"  // morton
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -735,18 +736,12 @@ ExactPairsCount evaluatePairsExactly(const TriMesh& mesh, const std::vector<doub
         Vec3 lo = mesh.points[vertices[0]];
         for (const std::uint32_t v : vertices)
             for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], mesh.points[v][a]);
-        const auto spread = [](std::uint64_t x) {  // 21 bits to every third bit
-            x &= 0x1fffff;
-            x = (x | x << 32) & 0x1f00000000ffffULL, x = (x | x << 16) & 0x1f0000ff0000ffULL;
-            x = (x | x << 8) & 0x100f00f00f00f00fULL, x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-            return (x | x << 2) & 0x1249249249249249ULL;
-        };
         std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(vertices.size());
         for (std::size_t k = 0; k < vertices.size(); ++k) {
             std::uint64_t c[3];
             for (int a = 0; a < 3; ++a)
                 c[a] = std::uint64_t(std::min(2097151.0, std::floor((mesh.points[vertices[k]][a] - lo[a]) / R)));
-            keyed[k] = {spread(c[0]) | spread(c[1]) << 1 | spread(c[2]) << 2, vertices[k]};
+            keyed[k] = {morton(c[0], c[1], c[2]), vertices[k]};
         }
         tbb::parallel_sort(keyed.begin(), keyed.end());
         for (std::size_t k = 0; k < vertices.size(); ++k) vertices[k] = keyed[k].second;
