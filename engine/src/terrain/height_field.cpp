@@ -191,17 +191,47 @@ std::map<std::pair<int, int>, double> hatIntegrals(double r, double cw, double c
                 else
                     w11 += a * (u + v - 1), w10 += a * (1 - v), w01 += a * (1 - u);
             };
-            for (int j = 0; j < kRimParts; ++j)
-                for (int i = 0; i < kRimParts; ++i) {
-                    const double a = areaInDisc(r2, x0 + i * pw, x0 + (i + 1) * pw, y0 + j * ph, y0 + (j + 1) * ph);
-                    if (!(a > 0)) continue;
-                    if (i + j + 1 == kRimParts) {  // the diagonal halves the part
-                        add(0.5 * a, (i + 1.0 / 3) / kRimParts, (j + 1.0 / 3) / kRimParts);
-                        add(0.5 * a, (i + 2.0 / 3) / kRimParts, (j + 2.0 / 3) / kRimParts);
-                    } else {
-                        add(a, (i + 0.5) / kRimParts, (j + 0.5) / kRimParts);
-                    }
+            const auto part = [&](int i, int j, double a) {
+                if (!(a > 0)) return;
+                if (i + j + 1 == kRimParts) {  // the diagonal halves the part
+                    add(0.5 * a, (i + 1.0 / 3) / kRimParts, (j + 1.0 / 3) / kRimParts);
+                    add(0.5 * a, (i + 2.0 / 3) / kRimParts, (j + 2.0 / 3) / kRimParts);
+                } else {
+                    add(a, (i + 0.5) / kRimParts, (j + 0.5) / kRimParts);
                 }
+            };
+            for (int j = 0; j < kRimParts; ++j) {
+                const double py0 = y0 + j * ph, py1 = y0 + (j + 1) * ph;
+                // The parts [first, last) of the row lie inside the disc with a part to spare
+                // on either side: their areas are pw × ph, and the hat values at their centres
+                // are linear in i on either side of the diagonal, so that the row's sums over
+                // them are sums of arithmetic series. Those outside [from, to) lie outside it
+                // with a part to spare (none where the row does). The parts between one by one.
+                const double nearY = py0 > 0 ? py0 : (py1 < 0 ? -py1 : 0);
+                if (nearY * nearY >= r2) continue;
+                const double farY = std::max(std::abs(py0), std::abs(py1)), reachX = std::sqrt(std::max(0.0, r2 - farY * farY));
+                const double outX = std::sqrt(r2 - nearY * nearY);
+                const int from = std::clamp(int(std::floor((-outX - x0) / pw)) - 1, 0, kRimParts);
+                const int to = std::clamp(int(std::ceil((outX - x0) / pw)) + 1, from, kRimParts);
+                const int first = std::clamp(int(std::ceil((-reachX - x0) / pw)) + 1, from, to);
+                const int last = std::clamp(int(std::floor((reachX - x0) / pw)) - 2, first, to);
+                for (int i = from; i < first; ++i) part(i, j, areaInDisc(r2, x0 + i * pw, x0 + (i + 1) * pw, py0, py1));
+                const int diagonal = kRimParts - 1 - j;
+                const double a = pw * ph, v = (j + 0.5) / kRimParts;
+                // Parts [p, q) of one side of the diagonal: their count and Σ u over them.
+                const auto run = [&](int p, int q, bool below) {
+                    if (q <= p) return;
+                    const double n = q - p, su = n * (p + q) / (2.0 * kRimParts);
+                    if (below)
+                        w00 += a * (n * (1 - v) - su), w10 += a * su, w01 += a * n * v;
+                    else
+                        w11 += a * (su + n * (v - 1)), w10 += a * n * (1 - v), w01 += a * (n - su);
+                };
+                run(first, std::min(last, diagonal), true);
+                if (diagonal >= first && diagonal < last) part(diagonal, j, a);
+                run(std::max(first, diagonal + 1), last, false);
+                for (int i = last; i < to; ++i) part(i, j, areaInDisc(r2, x0 + i * pw, x0 + (i + 1) * pw, py0, py1));
+            }
         }
     return w;
 }
@@ -701,9 +731,17 @@ class HeightCoverage {
 public:
     explicit HeightCoverage(const HeightGrid& g) : mCols(g.cols), mMissing(std::size_t(g.cols + 1) * (g.rows + 1), 0)
     {
-        for (int r = 0; r < g.rows; ++r)
-            for (int c = 0; c < g.cols; ++c)
-                at(c + 1, r + 1) = at(c, r + 1) + at(c + 1, r) - at(c, r) + (std::isnan(g.at(c, r)) ? 1 : 0);
+        // The rows' running counts in parallel, then the columns' sums of them in strips.
+        tbb::parallel_for(0, g.rows, [&](int r) {
+            std::int64_t running = 0;
+            for (int c = 0; c < g.cols; ++c) at(c + 1, r + 1) = running += std::isnan(g.at(c, r)) ? 1 : 0;
+        });
+        constexpr int kStrip = 256;
+        tbb::parallel_for(0, (g.cols + kStrip) / kStrip, [&](int strip) {
+            const int c0 = strip * kStrip + 1, c1 = std::min(g.cols + 1, c0 + kStrip);
+            for (int r = 1; r <= g.rows; ++r)
+                for (int c = c0; c < c1; ++c) at(c, r) += at(c, r - 1);
+        });
     }
     /// Whether every cell within @p reach columns and rows of (col, row) exists and has a height.
     bool complete(int col, int row, int reach, int rows) const { return complete(col, col, row, reach, rows); }
@@ -810,9 +848,16 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
     std::vector<long long> prefix;
     tbb::parallel_invoke(
         [&] {
-            tbb::parallel_for(std::size_t(0), discs.size(), [&](std::size_t k) {
-                discs[k] = sharedDisc(sums.radius[k], options.cellWidth, options.cellHeight, sums.split[k]);
-            });
+            // One disc per task, the largest radii first (their quadratures take longest).
+            tbb::parallel_for(
+                tbb::blocked_range<std::size_t>(0, discs.size(), 1),
+                [&](const tbb::blocked_range<std::size_t>& range) {
+                    for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                        const std::size_t k = discs.size() - 1 - i;
+                        discs[k] = sharedDisc(sums.radius[k], options.cellWidth, options.cellHeight, sums.split[k]);
+                    }
+                },
+                tbb::simple_partitioner());
         },
         [&] { coverageOf.emplace(grid); },
         [&] {
