@@ -4,7 +4,6 @@
 #include <tbb/parallel_reduce.h>
 
 #include <cmath>
-#include <functional>
 #include <iomanip>
 #include <limits>
 #include <sstream>
@@ -45,24 +44,36 @@ template <class RowOf>
 void addRows(MaskedValues& m, const FeatureSet& features, const std::vector<float>& filledShare, std::size_t n,
              RowOf rowOf)
 {
-    const auto count = [&](auto&& counts) {
-        return tbb::parallel_reduce(
-            tbb::blocked_range<std::size_t>(0, n, 1 << 16), std::size_t(0),
-            [&](const tbb::blocked_range<std::size_t>& range, std::size_t sum) {
-                for (std::size_t k = range.begin(); k < range.end(); ++k)
-                    if (const std::size_t i = rowOf(k); i != kNoRow) sum += counts(i);
-                return sum;
-            },
-            std::plus<std::size_t>());
-    };
-    m.withFilledShare += count([&](std::size_t i) { return filledShare[i] > 0; });
     const FeatureColumns* columns = countedColumns(features);
+    const std::size_t radii = columns ? columns->size() : 0;
+    // In one pass: the rows with a filled share, the NaN per radius computed (a DEM's bands
+    // need a few radii; the others' columns are empty), and the rows.
+    std::vector<const float*> counted;
+    std::vector<std::size_t> radiusOf;
+    for (std::size_t j = 0; j < radii; ++j)
+        if (!(*columns)[j].empty()) counted.push_back((*columns)[j].data()), radiusOf.push_back(j);
+    using Counts = std::vector<std::size_t>;  // withFilledShare, vertices, then per column counted
+    const Counts sums = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, n, 1 << 16), Counts(2 + counted.size(), 0),
+        [&](const tbb::blocked_range<std::size_t>& range, Counts c) {
+            for (std::size_t k = range.begin(); k < range.end(); ++k) {
+                const std::size_t i = rowOf(k);
+                if (i == kNoRow) continue;
+                c[0] += filledShare[i] > 0;
+                ++c[1];
+                for (std::size_t j = 0; j < counted.size(); ++j) c[2 + j] += std::isnan(counted[j][i]);
+            }
+            return c;
+        },
+        [](Counts a, const Counts& b) {
+            for (std::size_t j = 0; j < a.size(); ++j) a[j] += b[j];
+            return a;
+        });
+    m.withFilledShare += sums[0];
     if (!columns) return;
-    m.perRadius.resize(columns->size(), 0);
-    for (std::size_t j = 0; j < columns->size(); ++j)
-        if (!(*columns)[j].empty())  // a radius not computed (a DEM's bands need a few)
-            m.perRadius[j] += count([&](std::size_t i) { return std::isnan((*columns)[j][i]); });
-    m.vertices += count([](std::size_t) { return true; });
+    m.perRadius.resize(radii, 0);
+    for (std::size_t j = 0; j < counted.size(); ++j) m.perRadius[radiusOf[j]] += sums[2 + j];
+    m.vertices += sums[1];
 }
 
 } // namespace
