@@ -567,16 +567,26 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
     std::vector<char> givenSquare(sc * (std::size_t(win.rows) + 1));
     tbb::parallel_for(0, win.rows + 1, [&](int y) {
         char* out = &givenSquare[std::size_t(y) * sc];
-        for (std::size_t x = 0; x < sc; ++x) out[x] = given(own.col - 1 + int(x), own.row - 1 + y);
+        const int r = own.row - 1 + y, c0 = own.col - 1;
+        if (r < 0 || r + 1 >= gr || c0 < 0 || c0 + int(sc) >= gc) {  // at the grid's edge
+            for (std::size_t x = 0; x < sc; ++x) out[x] = given(c0 + int(x), r);
+            return;
+        }
+        const GridCell* k0 = &g.kind[std::size_t(r) * std::size_t(gc) + std::size_t(c0)];
+        const GridCell* k1 = k0 + gc;
+        for (std::size_t x = 0; x < sc; ++x)
+            out[x] = (k0[x] == GridCell::Height) & (k0[x + 1] == GridCell::Height) & (k1[x] == GridCell::Height) &
+                     (k1[x + 1] == GridCell::Height);
     });
     std::vector<std::size_t> squaresOfRow(std::size_t(win.rows), 0);
     std::vector<char> onSurface(nOwn, 0);
     tbb::parallel_for(0, win.rows, [&](int y) {
         const char* above = &givenSquare[std::size_t(y) * sc];
         const char* here = above + sc;
+        const GridCell* kinds = &g.kind[std::size_t(own.row + y) * std::size_t(gc) + std::size_t(own.col)];  // (inside the grid)
         for (int x = 0; x < win.cols; ++x) {
             const int c = own.col + x, r = own.row + y;
-            if (kindAt(c, r) != GridCell::Height) continue;
+            if (kinds[x] != GridCell::Height) continue;
             squaresOfRow[std::size_t(y)] += here[x + 1];
             if (!here[x + 1] && !here[x] && !above[x + 1] && !above[x]) continue;
             const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x);
