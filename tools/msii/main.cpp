@@ -7,6 +7,8 @@
 #include <msii/core/errors.h>
 #include <msii/core/version.h>
 
+#include <cstdio>
+#include <cstdlib>
 #include <iostream>
 
 int main(int argc, char** argv)
@@ -34,15 +36,23 @@ int main(int argc, char** argv)
         return 2;
     }
     try {
-        if (app.got_subcommand("compute")) return runCompute();
-        if (app.got_subcommand("metric")) return runMetric();
-        if (app.got_subcommand("smooth")) return runSmooth();
-        if (app.got_subcommand("map")) return runMap();
-        if (app.got_subcommand("render")) return runRender();
-        if (app.got_subcommand("segment")) return runSegment();
-        if (app.got_subcommand("outline")) return runOutline();
-        if (app.got_subcommand("merge")) return runMerge();
-        if (app.got_subcommand("view")) return runView();
+        int status = 2;
+        if (app.got_subcommand("compute")) status = runCompute();
+        else if (app.got_subcommand("metric")) status = runMetric();
+        else if (app.got_subcommand("smooth")) status = runSmooth();
+        else if (app.got_subcommand("map")) status = runMap();
+        else if (app.got_subcommand("render")) status = runRender();
+        else if (app.got_subcommand("segment")) status = runSegment();
+        else if (app.got_subcommand("outline")) status = runOutline();
+        else if (app.got_subcommand("merge")) status = runMerge();
+        else if (app.got_subcommand("view")) status = runView();
+        // The command's files are written, closed and renamed. What is left at exit is the
+        // libraries' teardown (PROJ closing its database, GDAL its drivers, TBB its threads):
+        // about 5 ms of a 0.3 s run on a 1000 x 1000 DEM, which the system reclaims anyway.
+        std::cout.flush();
+        std::cerr.flush();
+        std::fflush(nullptr);
+        std::_Exit(status);
     } catch (const std::bad_alloc&) {
         std::cerr << "msii: error: out of memory (try a larger --voxel-size)\n";
         return 1;
