@@ -83,7 +83,10 @@ What the rows are:
 - **Terrain tools' case** (`--terrain-peer`): a 1000 × 1000 DEM of 1 m at R = 10 and 30
   cells, on the height field and on the mesh (`--engine mesh`), and with `--rvt PATH`
   RVT_py's sky-view factor and openness (16 directions) and multi-scale topographic
-  position at the same radius ([terrain.md](terrain.md#large-areas)).
+  position at the same radius, their functions' time in one Python process, and the
+  sky-view factor and openness once more as a user runs them: a process of its own that
+  imports RVT_py, reads the DEM and writes both GeoTIFFs (`save_sky_view_factor`)
+  ([terrain.md](terrain.md#large-areas)).
 
 What limits the speed now, and the next steps:
 - **P and L's exact sums** (the check's flagged pairs, evaluated from the triangles) are the
