@@ -133,9 +133,11 @@ What limits the speed now, and the next steps:
   0.86 of the time of one bound for the whole disc (eight or sixteen sectors cost more in
   their bounds than they save in pieces). Next: the rim's pieces as annular sectors with
   h(ρ) integrated in closed form, so that they can be longer. On a 1000 × 1000 DEM at
-  R = 10 cells (about 0.3 s), the kernel is under half; loading GDAL's libraries (on the
-  first raster read) takes 0.05 s, reading the coordinate system (PROJ's database) 0.02 s, and
-  writing the Cloud-Optimized GeoTIFF (its ZSTD compression) 0.05 s.
+  R = 10 cells (0.29 s), the kernel is 0.09 s; a fixed 0.12 s is starting the process,
+  loading GDAL's libraries and reading the coordinate system (PROJ's database, 0.06 s
+  together), and writing the Cloud-Optimized GeoTIFF (0.055 s, ZSTD at level 1 hardly
+  faster), which RVT_py's function's time does not include (its whole process: 0.65 s;
+  [terrain.md](terrain.md#large-areas)).
 
 This machine's timings vary from one sitting to the next, by 15–20 % within a day and by up
 to 2× between days, also in stages whose code did not change: compare builds in alternating
