@@ -71,5 +71,4 @@ int main(int argc, char** argv)
         std::cerr << "msii: error: " << msii::printableLine(e.what()) << '\n';
         return 1;
     }
-    return 2;
 }
