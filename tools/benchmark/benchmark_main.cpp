@@ -136,7 +136,7 @@ What limits the speed now, and the next steps:
   R = 10 cells (0.29 s), the kernel is 0.09 s; a fixed 0.12 s is starting the process,
   loading GDAL's libraries and reading the coordinate system (PROJ's database, 0.06 s
   together), and writing the Cloud-Optimized GeoTIFF (0.055 s, ZSTD at level 1 hardly
-  faster), which RVT_py's function's time does not include (its whole process: 0.65 s;
+  faster), which RVT_py's function's time does not include (its whole process: 0.66 s;
   [terrain.md](terrain.md#large-areas)).
 
 This machine's timings vary from one sitting to the next, by 15–20 % within a day and by up
