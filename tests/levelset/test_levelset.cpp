@@ -91,6 +91,50 @@ TEST(LevelSet, BandIsExactAndSidesAreRightAroundSharpFeatures)
     EXPECT_GT(inBand, 5000u);
 }
 
+TEST(LevelSet, BandIsExactAtAVertexOfManyTriangles)
+{
+    // A closed cone whose apex joins 40 triangles, and whose base centre another 40: voxels
+    // closest to either are equally close to all of them, more than the band's rasterizer
+    // keeps as candidates, so those voxels take every triangle in reach instead.
+    const int k = 40;
+    TriMesh mesh;
+    mesh.points.push_back(Vec3(0, 0, 1));  // apex
+    mesh.points.push_back(Vec3(0, 0, 0));  // base centre
+    for (int i = 0; i < k; ++i) {
+        const double a = 2 * M_PI * i / k + 0.1;
+        mesh.points.push_back(Vec3(std::cos(a), std::sin(a), 0.0));
+    }
+    for (int i = 0; i < k; ++i) {
+        const auto u = std::uint32_t(2 + i), v = std::uint32_t(2 + (i + 1) % k);
+        mesh.triangles.push_back({0, u, v});
+        mesh.triangles.push_back({1, v, u});
+    }
+    LevelSetOptions lo;
+    lo.voxelSize = 0.05;
+    lo.halfWidth = 2;
+    const LevelSet ls = buildLevelSet(mesh, lo);
+    const double h = lo.voxelSize, band = lo.halfWidth * h;
+    std::size_t inBand = 0;
+    for (int i = -6; i <= 6; ++i)
+        for (int j = -6; j <= 6; ++j)
+            for (int l = -6; l <= 26; ++l) {
+                const Vec3 p(i * h, j * h, l * h);
+                double d = 1e9;
+                bool inside = true;  // the cone is convex: inside every face's plane
+                for (const auto& t : mesh.triangles) {
+                    const Vec3 &a = mesh.points[t[0]], &b = mesh.points[t[1]], &c = mesh.points[t[2]];
+                    d = std::min(d, triangleDistance(p, a, b, c));
+                    inside = inside && dot(p - a, cross(b - a, c - a)) < 0;
+                }
+                if (d < 1e-9 || d >= band - 1e-9) continue;
+                ++inBand;
+                const double value = ls.signedDistance(p);
+                ASSERT_EQ(value < 0, inside) << "voxel " << i << " " << j << " " << l;
+                ASSERT_NEAR(std::abs(value), d, 1e-6) << "voxel " << i << " " << j << " " << l;
+            }
+    EXPECT_GT(inBand, 500u);
+}
+
 TEST(LevelSet, SphereDistancesAreExactInTheBand)
 {
     samples::SphereOptions o;

@@ -30,11 +30,13 @@ struct Band {
 /// Every voxel centre closer than halfWidth·h to the mesh gets its exact distance and the
 /// sign of its closest feature's pseudo-normal.
 ///
-/// Triangles are binned to the 8³ blocks their band reaches; each block then takes, voxel by
-/// voxel, the closest of its triangles (ties keep the lowest face index), after two cheap
-/// rejections (the triangle's plane and its bounding sphere). So every voxel is exact
-/// whatever the shape, the cost is proportional to the band's size, and the result does not
-/// depend on the number of threads.
+/// Triangles are binned to the 8³ blocks their band reaches. In each block, a branch-free
+/// approximate distance, eight voxels of a row at once, keeps for every voxel the triangles
+/// within rounding of its least; those alone then get the exact distance, in ascending face
+/// order, and the closest wins (ties keep the lowest face index), as if every triangle had
+/// been tried. So every voxel is exact whatever the shape, the cost is proportional to the
+/// band's size, and the result depends neither on the number of threads nor on the
+/// processor's vector width.
 Band rasterizeBand(const TriMesh& mesh, const MeshDistance& distance, const BandOptions& options);
 
 } // namespace msii::detail
