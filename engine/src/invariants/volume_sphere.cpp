@@ -188,6 +188,9 @@ struct Stencil {
     std::array<std::vector<std::int32_t>, 3> offsets;
     std::vector<std::uint32_t> groupFirst;  // groups' ranges in offsets (size numGroups + 1)
     std::vector<float> wV, wS;              // per group: numRadii weights
+    /// Per radius: the groups [vFirst, vLast) whose V weight is neither 1 (all before) nor 0
+    /// (all after), and [sFirst, sLast) those whose S weight is not 0.
+    std::vector<std::uint32_t> vFirst, vLast, sFirst, sLast;
     std::vector<double> sumV, sumS;         // per radius: the stencil's own total
     std::size_t numGroups() const { return groupFirst.size() - 1; }
 };
@@ -249,16 +252,34 @@ Stencil makeStencil(const std::vector<double>& rho)  // radii in voxels of the l
         }
     }
     st.groupFirst.push_back(std::uint32_t(st.offsets[0].size()));
+    const std::size_t ng = st.numGroups();
+    st.vFirst.assign(nr, 0), st.vLast.assign(nr, 0), st.sFirst.assign(nr, std::uint32_t(ng)), st.sLast.assign(nr, 0);
+    for (int j = 0; j < nr; ++j) {
+        const auto v = [&](std::size_t g) { return st.wV[g * std::size_t(nr) + std::size_t(j)]; };
+        const auto sh = [&](std::size_t g) { return st.wS[g * std::size_t(nr) + std::size_t(j)]; };
+        std::size_t first = 0;
+        while (first < ng && v(first) == 1.0f) ++first;
+        std::size_t last = ng;
+        while (last > first && v(last - 1) == 0.0f) --last;
+        st.vFirst[j] = std::uint32_t(first), st.vLast[j] = std::uint32_t(last);
+        for (std::size_t g = 0; g < ng; ++g)
+            if (sh(g) != 0.0f) st.sFirst[j] = std::min(st.sFirst[j], std::uint32_t(g)), st.sLast[j] = std::uint32_t(g + 1);
+        st.sFirst[j] = std::min(st.sFirst[j], st.sLast[j]);
+    }
     return st;
 }
 
 /// Stencil sums for the kRow nodes of a row that starts at @p row in the dense block whose
 /// fastest axis runs along the row: V and S per radius, kRow floats each (one per node);
-/// S only if @p sumS is not null. The inner loops over kRow consecutive floats become single vector instructions; an AVX2
-/// version is compiled beside the generic one and chosen at run time.
+/// S only if @p sumS is not null. The groups' sums are added up as they come (@p below[g]:
+/// the sum of the groups before g), so that a radius's V is the sum below its first
+/// fractional group plus its fractional groups, and its S the sum of its groups with an S
+/// weight: each radius weighs only the groups near its sphere. The inner loops over kRow
+/// consecutive floats become single vector instructions; an AVX2 version is compiled beside
+/// the generic one and chosen at run time.
 __attribute__((target_clones("avx2", "default"))) void applyStencil(
     const Stencil& st, const std::vector<std::int32_t>& offsets, const float* row,
-    float* groupSum, float* sumV, float* sumS)
+    float* groupSum, float* below, float* sumV, float* sumS)
 {
     const std::size_t ng = st.numGroups();
     const std::int32_t* off = offsets.data();
@@ -278,27 +299,31 @@ __attribute__((target_clones("avx2", "default"))) void applyStencil(
             for (int t = 0; t < kRow; ++t) a0[t] += row[off[e] + t];
         for (int t = 0; t < kRow; ++t) groupSum[g * kRow + t] = a0[t] + a1[t];
     }
-    const int nr = st.numRadii;
-    std::fill(sumV, sumV + nr * kRow, 0.0f);
-    if (!sumS) {
-        for (std::size_t g = 0; g < ng; ++g) {
-            const float* wv = st.wV.data() + g * nr;
-            const float* sum = groupSum + g * kRow;
-            for (int j = 0; j < nr; ++j)
-                for (int t = 0; t < kRow; ++t) sumV[j * kRow + t] += wv[j] * sum[t];
+    // (A loop of its own: added to the one above, it would keep that from vectorising.)
+    float total[kRow] = {};
+    for (std::size_t g = 0; g < ng; ++g)
+        for (int t = 0; t < kRow; ++t) {
+            below[g * kRow + t] = total[t];
+            total[t] += groupSum[g * kRow + t];
         }
-        return;
-    }
-    std::fill(sumS, sumS + nr * kRow, 0.0f);
-    for (std::size_t g = 0; g < ng; ++g) {
-        const float* wv = st.wV.data() + g * nr;
-        const float* ws = st.wS.data() + g * nr;
-        const float* sum = groupSum + g * kRow;
-        for (int j = 0; j < nr; ++j)
-            for (int t = 0; t < kRow; ++t) {
-                sumV[j * kRow + t] += wv[j] * sum[t];
-                sumS[j * kRow + t] += ws[j] * sum[t];
-            }
+    for (int t = 0; t < kRow; ++t) below[ng * kRow + t] = total[t];
+    const int nr = st.numRadii;
+    for (int j = 0; j < nr; ++j) {
+        float v[kRow];
+        const std::size_t first = st.vFirst[std::size_t(j)], last = st.vLast[std::size_t(j)];
+        for (int t = 0; t < kRow; ++t) v[t] = below[first * kRow + t];
+        for (std::size_t g = first; g < last; ++g) {
+            const float w = st.wV[g * std::size_t(nr) + std::size_t(j)];
+            for (int t = 0; t < kRow; ++t) v[t] += w * groupSum[g * kRow + t];
+        }
+        for (int t = 0; t < kRow; ++t) sumV[j * kRow + t] = v[t];
+        if (!sumS) continue;
+        float sh[kRow] = {};
+        for (std::size_t g = st.sFirst[std::size_t(j)]; g < st.sLast[std::size_t(j)]; ++g) {
+            const float w = st.wS[g * std::size_t(nr) + std::size_t(j)];
+            for (int t = 0; t < kRow; ++t) sh[t] += w * groupSum[g * kRow + t];
+        }
+        for (int t = 0; t < kRow; ++t) sumS[j * kRow + t] = sh[t];
     }
 }
 
@@ -547,11 +572,12 @@ NodeValues stencilSums(LevelNodes& ln, const FloatTree& occ, const Stencil& sten
     const std::size_t denseSize = std::size_t(side) * side * side;
     struct Scratch {
         std::vector<float> zyx, buffer;
-        std::vector<float> groupSum, sumV, sumS;  // kRow floats per group / radius
+        std::vector<float> groupSum, below, sumV, sumS;  // kRow floats per group (and one) / radius
     };
     tbb::enumerable_thread_specific<Scratch> scratch([&] {
         return Scratch{std::vector<float>(denseSize), std::vector<float>(denseSize),
                        std::vector<float>(stencil.numGroups() * kRow),
+                       std::vector<float>((stencil.numGroups() + 1) * kRow),
                        std::vector<float>(nr * kRow), std::vector<float>(nr * kRow)};
     });
     if (progress) progress->start("V and S, level " + std::to_string(level), blocks.size());
@@ -598,7 +624,7 @@ NodeValues stencilSums(LevelNodes& ln, const FloatTree& occ, const Stencil& sten
                     const std::size_t start =
                         (std::size_t(u + stencil.reach) * side + std::size_t(v + stencil.reach)) *
                             side + std::size_t(stencil.reach);
-                    applyStencil(stencil, offsets, occupancyBlock + start, sc.groupSum.data(),
+                    applyStencil(stencil, offsets, occupancyBlock + start, sc.groupSum.data(), sc.below.data(),
                                  sc.sumV.data(), sphere ? sc.sumS.data() : nullptr);
                     for (int t = 0; t < kRow; ++t) {
                         const Coord local = axis == 2 ? Coord(u, v, t)
