@@ -121,9 +121,17 @@ What limits the speed now, and the next steps:
   share. Next: histograms shared by neighbouring vertices.
 - **V and S**: the level set and the stencils. The level set's cost follows the surface's
   area over the finest voxel squared, not the vertices: a slab whose walls and bottom are a
-  few long triangles pays for their area as for the top's. It includes loading OpenVDB's
+  few long triangles pays for their area as for the top's. Most of it is the band's
+  approximate distances, a row of eight voxels against a triangle at once (about 30
+  voxel-triangle pairs per band voxel on the 39k slab, where a row costs about 40 ns); in
+  vector lanes of floats, two rows at once, it was no faster. It includes loading OpenVDB's
   libraries (about 0.04 s; twice that while GDAL's were loaded into every run,
-  [architecture.md](architecture.md)). Next: a coarser level set where no vertex is near.
+  [architecture.md](architecture.md)). The stencils' largest part is now their entries'
+  additions, one per voxel of the largest ball per row of nodes; the coarser levels' nodes
+  each take an exact distance from the mesh (a descent, then a grid of triangles; about a
+  tenth of V and S), which the band's rasterization done at those levels would not make
+  cheaper (their reach, in triangles, is larger). Next: a coarser level set where no vertex
+  is near.
 - **DEMs** on the height field: the kernel is most of the time (reading, filling,
   continuing and writing the rest). It sums sixteen cells at a time (one AVX-512 register
   where the processor has it, two AVX2 registers elsewhere), its products fused into its
