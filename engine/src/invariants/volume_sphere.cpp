@@ -65,24 +65,36 @@ FloatTree::Ptr occupancyFromDistance(const openvdb::FloatGrid& sdf)
     const double h = sdf.voxelSize()[0];
     auto q = std::make_shared<FloatTree>(dist);  // same topology, values replaced below
 
+    using Leaf = FloatTree::LeafNodeType;
     openvdb::tree::LeafManager<FloatTree> leaves(*q);
-    leaves.foreach([&](FloatTree::LeafNodeType& leaf, std::size_t) {
+    leaves.foreach([&](Leaf& leaf, std::size_t) {
         openvdb::tree::ValueAccessor<const FloatTree> acc(dist);
-        for (auto it = leaf.beginValueAll(); it; ++it) {
-            const Coord ijk = it.getCoord();
-            const double phi = acc.getValue(ijk);
+        // The distances of the leaf (q is a copy of dist: the same leaves) and, off it, of
+        // its neighbours through the accessor.
+        const Leaf& source = *dist.probeConstLeaf(leaf.origin());
+        for (openvdb::Index offset = 0; offset < Leaf::SIZE; ++offset) {
+            const double phi = source.getValue(offset);
             // A voxel farther than 0.95 h from the surface is wholly on one side (the cube's
             // half diagonal 0.87 h plus the largest curvature term h/12), so only voxels
             // within h need φ's neighbours, which a band of half width 2 holds exactly.
-            if (!it.isValueOn() || std::abs(phi) >= h) {
-                it.setValue(phi < 0 ? -0.5f : 0.5f);
+            if (!leaf.isValueOn(offset) || std::abs(phi) >= h) {
+                leaf.setValueOnly(offset, phi < 0 ? -0.5f : 0.5f);
                 continue;
             }
-            const auto at = [&](int dx, int dy, int dz) {
-                return double(acc.getValue(ijk.offsetBy(dx, dy, dz)));
+            const Coord local = Leaf::offsetToLocalCoord(offset);
+            const Coord ijk = leaf.origin() + local;
+            const auto at = [&](int axis, int step) {
+                const int c = local[axis] + step;
+                if (c < 0 || c >= int(Leaf::DIM)) {
+                    Coord n = ijk;
+                    n[axis] += step;
+                    return double(acc.getValue(n));
+                }
+                const int stride = axis == 0 ? int(Leaf::DIM * Leaf::DIM) : axis == 1 ? int(Leaf::DIM) : 1;
+                return double(source.getValue(openvdb::Index(int(offset) + step * stride)));
             };
-            const double xp = at(1, 0, 0), xm = at(-1, 0, 0), yp = at(0, 1, 0),
-                         ym = at(0, -1, 0), zp = at(0, 0, 1), zm = at(0, 0, -1);
+            const double xp = at(0, 1), xm = at(0, -1), yp = at(1, 1), ym = at(1, -1), zp = at(2, 1),
+                         zm = at(2, -1);
             const double gx = xp - xm, gy = yp - ym, gz = zp - zm;
             const double g = std::sqrt(gx * gx + gy * gy + gz * gz);
             double occupancy;
@@ -97,7 +109,7 @@ FloatTree::Ptr occupancyFromDistance(const openvdb::FloatGrid& sdf)
                 occupancy = detail::cubeFraction(-phiEff / h, std::abs(gx) / g,
                                                  std::abs(gy) / g, std::abs(gz) / g);
             }
-            it.setValue(float(0.5 - occupancy));
+            leaf.setValueOnly(offset, float(0.5 - occupancy));
         }
     });
     auto tiles = q->beginValueOff();
@@ -126,14 +138,25 @@ FloatTree::Ptr restrictOccupancy(const FloatTree& fine)
     std::vector<std::unique_ptr<Leaf>> leafs(origins.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, origins.size()), [&](const auto& r) {
         openvdb::tree::ValueAccessor<const FloatTree> acc(fine);
+        constexpr int kHalf = int(Leaf::DIM) / 2;
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             auto leaf = std::make_unique<Leaf>(origins[i], 0.5f, /*active=*/true);
-            for (auto it = leaf->beginValueAll(); it; ++it) {
-                const Coord f = it.getCoord() << 1;
-                double sum = 0;
-                for (int c = 0; c < 8; ++c)
-                    sum += acc.getValue(f.offsetBy(c & 1, (c >> 1) & 1, c >> 2));
-                it.setValue(float(sum / 8.0));
+            // The coarse leaf's eighths, each the children of one fine leaf (or tile).
+            for (int part = 0; part < 8; ++part) {
+                const Coord corner((part & 1) * kHalf, ((part >> 1) & 1) * kHalf, (part >> 2) * kHalf);
+                const Coord fineOrigin = (origins[i] + corner) << 1;
+                const Leaf* source = acc.probeConstLeaf(fineOrigin);
+                const float tile = source ? 0.0f : acc.getValue(fineOrigin);
+                for (int x = 0; x < kHalf; ++x)
+                    for (int y = 0; y < kHalf; ++y)
+                        for (int z = 0; z < kHalf; ++z) {
+                            double sum = 0;
+                            for (int c = 0; c < 8; ++c)
+                                sum += source ? source->getValue(Leaf::coordToOffset(
+                                                    Coord(2 * x + (c & 1), 2 * y + ((c >> 1) & 1), 2 * z + (c >> 2))))
+                                              : tile;
+                            leaf->setValueOnly(Leaf::coordToOffset(corner + Coord(x, y, z)), float(sum / 8.0));
+                        }
             }
             leafs[i] = std::move(leaf);
         }
