@@ -51,6 +51,15 @@ double triangleDistance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3&
     return std::min({segment(a, b), segment(b, c), segment(c, a)});
 }
 
+/// Reference distance from p to the mesh: the least over all its triangles.
+double meshDistance(const TriMesh& mesh, const Vec3& p)
+{
+    double d = 1e9;
+    for (const auto& t : mesh.triangles)
+        d = std::min(d, triangleDistance(p, mesh.points[t[0]], mesh.points[t[1]], mesh.points[t[2]]));
+    return d;
+}
+
 } // namespace
 
 TEST(LevelSet, BandIsExactAndSidesAreRightAroundSharpFeatures)
@@ -74,10 +83,7 @@ TEST(LevelSet, BandIsExactAndSidesAreRightAroundSharpFeatures)
         for (int j = -25; j <= 25; ++j)
             for (int k = -25; k <= 25; ++k) {
                 const Vec3 p(i * h, j * h, k * h);
-                double d = 1e9;
-                for (const auto& t : mesh.triangles)
-                    d = std::min(d, triangleDistance(p, mesh.points[t[0]], mesh.points[t[1]],
-                                                     mesh.points[t[2]]));
+                const double d = meshDistance(mesh, p);
                 const Vec3 q = unrotate(p);  // in the cube's own frame
                 const bool inside = std::max({std::abs(q.x), std::abs(q.y), std::abs(q.z)}) < 1.0;
                 const double value = ls.signedDistance(p);
@@ -119,14 +125,13 @@ TEST(LevelSet, BandIsExactAtAVertexOfManyTriangles)
         for (int j = -6; j <= 6; ++j)
             for (int l = -6; l <= 26; ++l) {
                 const Vec3 p(i * h, j * h, l * h);
-                double d = 1e9;
+                const double d = meshDistance(mesh, p);
+                if (d < 1e-9 || d >= band - 1e-9) continue;
                 bool inside = true;  // the cone is convex: inside every face's plane
                 for (const auto& t : mesh.triangles) {
                     const Vec3 &a = mesh.points[t[0]], &b = mesh.points[t[1]], &c = mesh.points[t[2]];
-                    d = std::min(d, triangleDistance(p, a, b, c));
                     inside = inside && dot(p - a, cross(b - a, c - a)) < 0;
                 }
-                if (d < 1e-9 || d >= band - 1e-9) continue;
                 ++inBand;
                 const double value = ls.signedDistance(p);
                 ASSERT_EQ(value < 0, inside) << "voxel " << i << " " << j << " " << l;
