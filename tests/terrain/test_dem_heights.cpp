@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <random>
 #include <string>
 #include <vector>
@@ -258,6 +259,80 @@ TEST(DemHeights, PlaneIsOneHalfUpToTheEdgesAndAcrossGaps)
     EXPECT_NEAR(share[std::size_t(30) * n], 0.5, 0.05);
     EXPECT_NEAR(share[0], 0.75, 0.05);
     EXPECT_EQ(share[std::size_t(45) * n + 15], 0.0f);
+}
+
+// Radii far below a cell: the disc's quadrature covers the disc, not whole cells cut as
+// finely as the disc needs (a radius of a thousandth of a cell once took minutes), the values
+// of a tilted plane are ½, and the run says that such radii see only the cell's plane.
+TEST(DemHeights, RadiiFarBelowACellAreComputedAndSaidSo)
+{
+    const test::TempDir dir;
+    const int n = 20;
+    const std::string input = gridFile(dir, "plane.tif", n, n, 1.0, [](int c, int r) { return 200 + 0.4 * c - 0.7 * r; });
+    const auto belowCell = [](const DemComputeResult& r) {
+        for (const Diagnostic& d : r.diagnostics)
+            if (d.kind == "smallest_radius_below_cell") return true;
+        return false;
+    };
+    const DemComputeResult tiny = computeDem(input, dir.file("tiny.tif"), options(0.004, 4, {"V_01", "V_04", "S_04"}));
+    EXPECT_TRUE(belowCell(tiny));
+    const RasterImage a = readRaster(dir.file("tiny.tif"));
+    double worst = 0;
+    std::size_t compared = 0;
+    for (const RasterBand& band : a.bands)
+        for (const float v : band.values)
+            if (!std::isnan(v)) worst = std::max(worst, std::abs(double(v) - 0.5)), ++compared;
+    std::printf("plane, R = 0.004 cells: largest |value - 1/2| %.1e over %zu values\n", worst, compared);
+    EXPECT_EQ(compared, 3u * n * n);
+    EXPECT_LE(worst, 1e-3);
+    // Radii of whole cells: not said.
+    EXPECT_FALSE(belowCell(computeDem(input, dir.file("cells.tif"), options(4, 4, {"V_04"}))));
+}
+
+// A radius larger than the whole DEM (R in other units than the DEM's, most likely) is
+// refused before anything is computed: its balls would hold all of it, at a cost growing
+// with R²; R as large as the DEM is computed.
+TEST(DemHeights, RadiusBeyondTheWholeDemIsRefused)
+{
+    const test::TempDir dir;
+    const std::string input = gridFile(dir, "plane.tif", 20, 10, 1.0, [](int c, int r) { return 200 + 0.4 * c - 0.7 * r; });
+    try {
+        computeDem(input, dir.file("wide.tif"), options(21, 4, {"V_04"}));
+        ADD_FAILURE() << "R = 21 on a DEM 20 m across was computed";
+    } catch (const InvalidInputError& e) {
+        EXPECT_NE(std::string(e.what()).find("larger than the whole DEM (20"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir.file("wide.tif")));
+    EXPECT_EQ(computeDem(input, dir.file("whole.tif"), options(20, 4, {"V_04"})).input.numValid, 200u);
+}
+
+// Cells many times longer one way than the other are a broken pixel size (a GeoTIFF's
+// ModelPixelScale of 1 × 9999): refused before anything is computed, with the command that
+// makes them square; cells of 1 × 2 are computed.
+TEST(DemHeights, CellsFarLongerOneWayAreRefused)
+{
+    const test::TempDir dir;
+    const auto write = [&](const std::string& name, double cellHeight) {
+        RasterGeoreference g;
+        g.width = 30, g.height = 20;
+        g.transform = {500000, 1.0, 0, 5500000, 0, -cellHeight};
+        g.crsWkt = crsWkt("EPSG:25832");
+        std::vector<float> heights(std::size_t(g.width) * std::size_t(g.height));
+        for (std::size_t k = 0; k < heights.size(); ++k) heights[k] = float(100 + 0.01 * double(k % 30));
+        writeRaster(dir.file(name), g, {{"height", heights}}, RasterOutputOptions());
+        return dir.file(name);
+    };
+    const std::string needles = write("needles.tif", 9999), oblong = write("oblong.tif", 2);
+    try {
+        computeDem(needles, dir.file("needles.msii.tif"), options(4, 4, {"V_04"}));
+        ADD_FAILURE() << "cells of 1 x 9999 were computed";
+    } catch (const InvalidInputError& e) {
+        EXPECT_NE(std::string(e.what()).find("far longer one way"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("gdalwarp -tr 1 1"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir.file("needles.msii.tif")));
+    const DemComputeResult r = computeDem(oblong, dir.file("oblong.msii.tif"), options(8, 4, {"V_04"}));
+    EXPECT_EQ(r.input.numValid, 600u);
 }
 
 TEST(DemHeights, PAndLTakeTheMeshRouteAndSaySo)

@@ -297,6 +297,18 @@ WindowLayout layHeightFieldWindows(const DemSource& source, const DemComputeOpti
     c.fitRadius = std::max(0.25 * asked.radius, 3 * w.cell);
     w.region = regionOf(options, w.width, w.height);
     result.plan.radii = k.radii;
+    // Within a cell the height field is the plane of its two triangles: a ball smaller than
+    // a cell measures that plane's slope, not relief (the paper's smallest radius above the
+    // shortest edge, §3). Said once, as the mesh route says it of the median edge.
+    if (k.radii.front() < w.cell * (1 - 1e-9)) {
+        std::ostringstream msg;
+        msg << "the smallest radius (" << k.radii.front() << ") is below the cell size (" << w.cell
+            << "): within a cell the DEM is a plane, so values at such radii show its slope, not relief; "
+            << "every radius is at least a cell when R is at least N cells (" << w.cell * double(k.radii.size())
+            << " for N = " << k.radii.size() << "), or with fewer radii";
+        result.diagnostics.push_back(
+            {"smallest_radius_below_cell", 0, {{"radius", k.radii.front()}, {"cell", w.cell}}, msg.str()});
+    }
     // Own cells per window: 2048² cells take about 0.2 GB with their halos and bands.
     constexpr int kSide = 2048;
     const int side = options.windowCells > 0 ? options.windowCells : kSide;
@@ -821,6 +833,20 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
     const DemSource source(input, ro);
     result.input = source.info();
     const InvariantsOptions& computed = options.compute.invariants;
+    // A ball wider than the whole raster holds all of it and mostly its continuation past
+    // the edges, at a cost that grows with R²: most likely R in other units than the DEM's.
+    {
+        const RasterGeoreference& g = result.input.georeference;
+        const std::array<double, 6>& t = g.transform;
+        const double across = std::max(double(g.width) * std::hypot(t[1], t[4]), double(g.height) * std::hypot(t[2], t[5]));
+        if (computed.radius > across) {
+            std::ostringstream msg;
+            msg << "the radius R = " << computed.radius << " is larger than the whole DEM (" << across
+                << " across" << (g.units.empty() ? "" : "; unit: " + g.units) << "): every ball would hold all of it and mostly its continuation past the edges; "
+                << "R is in the DEM's ground units, about the size of the largest feature to detect";
+            throw InvalidInputError(msg.str());
+        }
+    }
     result.engine = asked.engine;
     if (asked.engine == DemEngine::HeightField && (computed.computePatch || computed.computeLine)) {
         result.engine = DemEngine::Mesh;

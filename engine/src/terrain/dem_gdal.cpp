@@ -18,6 +18,13 @@
 
 namespace msii {
 
+namespace {
+
+/// The longest side of a cell at most this many times its shortest (openDemHere).
+constexpr double kMaxCellAspect = 20;
+
+} // namespace
+
 namespace detail {
 
 void initGdal()
@@ -147,6 +154,19 @@ DemDataset* openDemHere(const std::string& path, const DemReadOptions& options, 
         }
     const double det = g.transform[1] * g.transform[5] - g.transform[2] * g.transform[4];
     if (!(std::abs(det) > 0) || !std::isfinite(det)) throw InvalidInputError(name + " has a degenerate geotransform");
+    // Elevation models have square cells, or nearly (1 × 2 at most in practice); cells many
+    // times longer one way are a broken pixel size, and the height field's quadrature, fine
+    // enough for the shorter side, would cut the longer one into that many more pieces.
+    const double cellWidth = std::hypot(t[1], t[4]), cellHeight = std::hypot(t[2], t[5]);
+    if (std::max(cellWidth, cellHeight) > kMaxCellAspect * std::min(cellWidth, cellHeight)) {
+        std::ostringstream msg;
+        msg << name << " has cells of " << cellWidth << " × " << cellHeight
+            << ", far longer one way than the other: no elevation model has such cells, so its pixel size is "
+            << "likely broken (gdalinfo shows it); if the cells are right, resample them to squares, e.g. gdalwarp -tr "
+            << std::min(cellWidth, cellHeight) << ' ' << std::min(cellWidth, cellHeight) << " -r bilinear " << name << ' '
+            << std::filesystem::path(path).stem().string() << "_square.tif";
+        throw InvalidInputError(msg.str());
+    }
     GDALRasterBand* band = ds.GetRasterBand(info.band);
     int hasNodata = 0, hasScale = 0, hasOffset = 0;
     heights.nodata = band->GetNoDataValue(&hasNodata);

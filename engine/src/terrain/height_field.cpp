@@ -302,11 +302,21 @@ DiscSamples discSamples(double r, double cellWidth, double cellHeight, int split
     // clamp's edge crossing the piece errs less than the rim's finer pieces), split × split
     // per cell elsewhere (docs/method.md, Height fields).
     const int half = split / 2;
-    for (int dy = -reachY; dy <= reachY; ++dy)
-        for (int b = 0; b < half; ++b) {
+    // The pieces of 2 × 2 of a cell that overlap [−r, r] along an axis, and one more on
+    // either side against rounding: the others lie outside the disc and add nothing. A disc
+    // far smaller than a cell thus costs its own pieces, not the split² of whole cells.
+    const auto overlapping = [&](int d, double cellSize, double piece) {
+        const double start = (d - 0.5) * cellSize;
+        const double lo = std::floor((-r - start) / (2 * piece)) - 1, hi = std::floor((r - start) / (2 * piece)) + 1;
+        return std::pair<int, int>(int(std::clamp(lo, 0.0, double(half))), int(std::clamp(hi + 1, 0.0, double(half))));
+    };
+    for (int dy = -reachY; dy <= reachY; ++dy) {
+        const auto [bFirst, bEnd] = overlapping(dy, cellHeight, ph);
+        for (int b = bFirst; b < bEnd; ++b) {
             const double y0 = (dy - 0.5) * cellHeight + 2 * b * ph, y1 = y0 + 2 * ph;
-            for (int dx = -reachX; dx <= reachX; ++dx)
-                for (int a = 0; a < half; ++a) {
+            for (int dx = -reachX; dx <= reachX; ++dx) {
+                const auto [aFirst, aEnd] = overlapping(dx, cellWidth, pw);
+                for (int a = aFirst; a < aEnd; ++a) {
                     const double x0 = (dx - 0.5) * cellWidth + 2 * a * pw, x1 = x0 + 2 * pw;
                     const double farX = std::max(std::abs(x0), std::abs(x1)), farY = std::max(std::abs(y0), std::abs(y1));
                     if (r2 - farX * farX - farY * farY >= r2 / 16) {
@@ -318,7 +328,9 @@ DiscSamples discSamples(double r, double cellWidth, double cellHeight, int split
                             add(x0 + i * pw, x0 + (i + 1) * pw, y0 + j * ph, y0 + (j + 1) * ph,
                                 dx - 0.5 + (2 * a + i + 0.5) / split, dy - 0.5 + (2 * b + j + 0.5) / split);
                 }
+            }
         }
+    }
     std::stable_sort(pieces.begin(), pieces.end(), [](const Piece& p, const Piece& q) {
         return p.sector != q.sector ? p.sector < q.sector : p.meanHalfChord < q.meanHalfChord;
     });
