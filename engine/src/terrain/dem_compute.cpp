@@ -842,7 +842,8 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
         if (computed.radius > across) {
             std::ostringstream msg;
             msg << "the radius R = " << computed.radius << " is larger than the whole DEM (" << across
-                << " across" << (g.units.empty() ? "" : "; unit: " + g.units) << "): every ball would hold all of it and mostly its continuation past the edges; "
+                << " across" << (g.units.empty() ? "" : "; unit: " + g.units)
+                << "): every ball would hold all of it and mostly its continuation past the edges; "
                 << "R is in the DEM's ground units, about the size of the largest feature to detect";
             throw InvalidInputError(msg.str());
         }
