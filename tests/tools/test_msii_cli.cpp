@@ -231,6 +231,25 @@ TEST(MsiiCli, BadInputFailsCleanly)
         EXPECT_EQ(r.err.rfind("msii: error: ", 0), 0u) << r.err;
         EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     }
+    {
+        // Next to the input by default: where that place cannot take the output (a folder
+        // of its name here; a read-only data folder for most users), the line says where
+        // else it can go. With --output the user chose the place, and is not told.
+        SCOPED_TRACE("default output place unwritable");
+        const fs::path folder = tempDir() / "readonly-place";
+        fs::create_directories(folder / "patch.msii.ply");
+        fs::copy_file(smallPatch(), folder / "patch.ply", fs::copy_options::overwrite_existing);
+        const RunResult r = runMsii("compute '" + (folder / "patch.ply").string() + "' -r 1 -n 4");
+        EXPECT_NE(r.code, 0);
+        EXPECT_EQ(r.err.rfind("msii: error: ", 0), 0u) << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+        EXPECT_NE(r.err.find("it is a folder. Write it elsewhere with -o FILE or --output-dir FOLDER."), std::string::npos)
+            << r.err;
+        const RunResult chosen = runMsii("compute '" + (folder / "patch.ply").string() + "' -r 1 -n 4 --output '" +
+                                         (folder / "patch.msii.ply").string() + "'");
+        EXPECT_NE(chosen.code, 0);
+        EXPECT_EQ(chosen.err.find("Write it elsewhere"), std::string::npos) << chosen.err;
+    }
 }
 
 // --random-vertices draws among the vertices in a face: a scan's stray points (here more

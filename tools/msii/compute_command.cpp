@@ -597,7 +597,17 @@ std::function<int()> addComputeCommand(CLI::App& app)
             if (ec) throw IOError("cannot create the output folder " + args->outputDir + ": " + ec.message());
         }
         if (!collection) {
-            computeOne(*args, inputs.front(), outputPathFor(*args, inputs.front()));
+            const std::string output = outputPathFor(*args, inputs.front());
+            // The default place, next to the input, may be a data folder the user cannot
+            // write to (a read-only share, a DVD): say where else the output can go.
+            if (args->output.empty() && args->outputDir.empty() && args->rasterOutput.empty()) {
+                try {
+                    checkWritable(output);
+                } catch (const IOError& e) {
+                    throw IOError(std::string(e.what()) + " Write it elsewhere with -o FILE or --output-dir FOLDER.");
+                }
+            }
+            computeOne(*args, inputs.front(), output);
             return 0;
         }
         return computeCollection(*args, inputs);
