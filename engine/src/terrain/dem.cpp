@@ -35,8 +35,8 @@ std::string utmCrsFor(double longitude, double latitude)
 
 double shortestCellStep(const RasterGeoreference& grid)
 {
-    const std::array<double, 6>& t = grid.transform;
-    return std::min(std::hypot(t[1], t[4]), std::hypot(t[2], t[5]));
+    const auto [width, height] = cellSides(grid);
+    return std::min(width, height);
 }
 
 struct DemSource::Impl {

@@ -262,7 +262,6 @@ WindowLayout layHeightFieldWindows(const DemSource& source, const DemComputeOpti
 {
     const InvariantsOptions& asked = options.compute.invariants;
     const RasterGeoreference& grid = source.info().georeference;
-    const std::array<double, 6>& t = grid.transform;
     WindowLayout w;
     w.heightField = true;
     w.width = grid.width, w.height = grid.height;
@@ -271,7 +270,8 @@ WindowLayout layHeightFieldWindows(const DemSource& source, const DemComputeOpti
     w.cell = shortestCellStep(grid);
     HeightFieldOptions& k = w.kernel;
     k.radii = equidistantRadii(asked.radius, asked.scales);
-    k.cellWidth = std::hypot(t[1], t[4]), k.cellHeight = std::hypot(t[2], t[5]);
+    const auto [cellWidth, cellHeight] = cellSides(grid);
+    k.cellWidth = cellWidth, k.cellHeight = cellHeight;
     k.computeVolume = asked.computeVolume, k.computeSphere = asked.computeSphere;
     // The radii the bands need: those named; R for quality; every one for valid_radii, and
     // for quality where balls are masked (the largest with a value).
@@ -837,8 +837,8 @@ DemComputeResult computeDem(const std::string& input, const std::string& output,
     // the edges, at a cost that grows with R²: most likely R in other units than the DEM's.
     {
         const RasterGeoreference& g = result.input.georeference;
-        const std::array<double, 6>& t = g.transform;
-        const double across = std::max(double(g.width) * std::hypot(t[1], t[4]), double(g.height) * std::hypot(t[2], t[5]));
+        const auto [cellWidth, cellHeight] = cellSides(g);
+        const double across = std::max(double(g.width) * cellWidth, double(g.height) * cellHeight);
         if (computed.radius > across) {
             std::ostringstream msg;
             msg << "the radius R = " << computed.radius << " is larger than the whole DEM (" << across

@@ -157,7 +157,7 @@ DemDataset* openDemHere(const std::string& path, const DemReadOptions& options, 
     // Elevation models have square cells, or nearly (1 × 2 at most in practice); cells many
     // times longer one way are a broken pixel size, and the height field's quadrature, fine
     // enough for the shorter side, would cut the longer one into that many more pieces.
-    const double cellWidth = std::hypot(t[1], t[4]), cellHeight = std::hypot(t[2], t[5]);
+    const auto [cellWidth, cellHeight] = cellSides(g);
     if (std::max(cellWidth, cellHeight) > kMaxCellAspect * std::min(cellWidth, cellHeight)) {
         std::ostringstream msg;
         msg << name << " has cells of " << cellWidth << " × " << cellHeight

@@ -8,6 +8,7 @@
 #include <msii/mesh/trimesh.h>
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <map>
@@ -113,6 +114,14 @@ std::string crsWkt(const std::string& definition);
 /// degrees: "EPSG:326zz" north of the equator, "EPSG:327zz" south (zones of 6°, without the
 /// exceptions around Norway and Svalbard). For the hint to a DEM in degrees.
 std::string utmCrsFor(double longitude, double latitude);
+
+/// The sides of @p grid's cells on the ground: along a row and down a column (its cells may
+/// be rectangular or rotated). Inline: the raster library checks them too.
+inline std::array<double, 2> cellSides(const RasterGeoreference& grid)
+{
+    const std::array<double, 6>& t = grid.transform;
+    return {std::hypot(t[1], t[4]), std::hypot(t[2], t[5])};
+}
 
 /// The shortest step between neighbouring cell centres of @p grid on the ground (its cells
 /// may be rectangular or rotated).
