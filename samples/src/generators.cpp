@@ -61,6 +61,7 @@ enum Stream : std::uint64_t {
     kStreamNoise,
     kStreamHoles,
     kStreamRoughness,
+    kStreamMarks,
 };
 
 // ---------------------------------------------------------------------------------------
@@ -676,8 +677,123 @@ TriMesh makeSphere(const SphereOptions& options)
 }
 
 // ---------------------------------------------------------------------------------------
-// Cube
+// Box lattices: the cube and the rounded tablet
 // ---------------------------------------------------------------------------------------
+
+namespace {
+
+/// The surface of the integer lattice box {0..n[0]} × {0..n[1]} × {0..n[2]}: its vertices
+/// face by face, row by row, shared along the box's edges, and per face the grid of vertex
+/// ids that triangulateGrid takes.
+struct BoxLattice {
+    /// A face: the lattice points origin + i u + j v (0 <= i <= nu, 0 <= j <= nv), u × v
+    /// the outward normal.
+    struct Face {
+        std::array<int, 3> origin, u, v;
+        int nu = 0, nv = 0;
+        std::vector<std::uint32_t> grid;  ///< vertex id of (i, j) at j (nu + 1) + i
+    };
+    std::array<int, 3> n{};
+    std::vector<std::array<int, 3>> points;  ///< lattice position of each vertex
+    std::array<Face, 6> faces;
+
+    /// A number unique to each lattice position (the jitter's hash key).
+    std::uint64_t key(const std::array<int, 3>& p) const
+    {
+        return (std::uint64_t(p[0]) * std::uint64_t(n[1] + 1) + std::uint64_t(p[1])) * std::uint64_t(n[2] + 1) +
+               std::uint64_t(p[2]);
+    }
+    std::size_t numTriangles() const
+    {
+        std::size_t count = 0;
+        for (const Face& f : faces) count += 2 * std::size_t(f.nu) * std::size_t(f.nv);
+        return count;
+    }
+};
+
+BoxLattice makeBoxLattice(const std::array<int, 3>& n)
+{
+    BoxLattice box;
+    box.n = n;
+    const auto face = [&](std::array<int, 3> origin, std::array<int, 3> u, std::array<int, 3> v) {
+        BoxLattice::Face f{origin, u, v, 0, 0, {}};
+        for (int a = 0; a < 3; ++a) f.nu += u[std::size_t(a)] * n[std::size_t(a)], f.nv += v[std::size_t(a)] * n[std::size_t(a)];
+        return f;
+    };
+    box.faces = {{
+        face({0, 0, 0}, {0, 1, 0}, {1, 0, 0}),     // z = 0, normal -z
+        face({0, 0, n[2]}, {1, 0, 0}, {0, 1, 0}),  // z = top, +z
+        face({0, 0, 0}, {0, 0, 1}, {0, 1, 0}),     // x = 0, -x
+        face({n[0], 0, 0}, {0, 1, 0}, {0, 0, 1}),  // x = top, +x
+        face({0, 0, 0}, {1, 0, 0}, {0, 0, 1}),     // y = 0, -y
+        face({0, n[1], 0}, {0, 0, 1}, {1, 0, 0}),  // y = top, +y
+    }};
+    std::unordered_map<std::uint64_t, std::uint32_t> shared;
+    for (BoxLattice::Face& F : box.faces) {
+        F.grid.resize(std::size_t(F.nu + 1) * std::size_t(F.nv + 1));
+        for (int j = 0; j <= F.nv; ++j)
+            for (int i = 0; i <= F.nu; ++i) {
+                const std::array<int, 3> p = {F.origin[0] + i * F.u[0] + j * F.v[0],
+                                              F.origin[1] + i * F.u[1] + j * F.v[1],
+                                              F.origin[2] + i * F.u[2] + j * F.v[2]};
+                std::uint32_t id;
+                if (i == 0 || j == 0 || i == F.nu || j == F.nv) {
+                    const auto [it, inserted] = shared.emplace(box.key(p), std::uint32_t(box.points.size()));
+                    if (inserted) box.points.push_back(p);
+                    id = it->second;
+                } else {
+                    id = std::uint32_t(box.points.size());
+                    box.points.push_back(p);
+                }
+                F.grid[std::size_t(j) * std::size_t(F.nu + 1) + std::size_t(i)] = id;
+            }
+    }
+    return box;
+}
+
+/// The lattice's points at @p extent (mm per axis), jittered: coordinates on a face or edge
+/// (0 < p < n) are free, in a disc for face vertices and along the edge for edge vertices;
+/// 0 and n stay exact.
+std::vector<Vec3> jitteredBoxPoints(const BoxLattice& box, const std::array<double, 3>& extent, std::uint64_t seed)
+{
+    std::vector<Vec3> points(box.points.size());
+    tbb::parallel_for(std::size_t(0), box.points.size(), [&](std::size_t id) {
+        const auto& p = box.points[id];
+        const std::uint64_t h = hashKey(seed, kStreamJitter, box.key(p));
+        std::array<double, 2> d = unitDiscPoint(h);
+        int freeAxes = 0;
+        for (std::size_t a = 0; a < 3; ++a) freeAxes += (p[a] > 0 && p[a] < box.n[a]);
+        if (freeAxes == 1) d[0] = signedUnit(h);
+        Vec3 q;
+        int used = 0;
+        for (std::size_t a = 0; a < 3; ++a) {
+            const int pa = p[a], na = box.n[a];
+            q[int(a)] = latticeCoord(pa, na, extent[a]);
+            if (pa > 0 && pa < na) q[int(a)] += kJitter * (extent[a] / na) * d[std::size_t(used++)];
+        }
+        points[id] = q;
+    });
+    return points;
+}
+
+/// The lattice's faces triangulated (triangulateGrid), face after face.
+std::vector<Triangle> boxTriangles(const BoxLattice& box, const std::vector<Vec3>& points, std::uint64_t seed)
+{
+    std::vector<Triangle> triangles(box.numTriangles());
+    std::size_t at = 0;
+    for (std::size_t f = 0; f < 6; ++f) {
+        const BoxLattice::Face& F = box.faces[f];
+        const std::uint32_t* g = F.grid.data();
+        const int nu = F.nu;
+        const auto index = [g, nu](int i, int j) { return g[std::size_t(j) * std::size_t(nu + 1) + std::size_t(i)]; };
+        triangulateGrid(points, F.nu, F.nv, index, seed, kStreamCubeDiagonal + std::uint64_t(f), false,
+                        triangles.data() + at);
+        at += 2 * std::size_t(F.nu) * std::size_t(F.nv);
+    }
+    return triangles;
+}
+
+} // namespace
 
 TriMesh makeCube(const CubeOptions& options)
 {
@@ -685,83 +801,160 @@ TriMesh makeCube(const CubeOptions& options)
     requirePositive(options.spacing, "spacing");
     const int n = latticeCells(options.side, options.spacing);
     requireVertexCount(6.0 * double(n) * double(n) + 2.0);
-    const double side = options.side;
-
-    // Faces as origin + i U + j V on the integer lattice {0..n}^3, U x V = outward normal.
-    struct Face {
-        std::array<int, 3> origin, u, v;
-    };
-    const std::array<Face, 6> faces = {{
-        {{0, 0, 0}, {0, 1, 0}, {1, 0, 0}},  // z = 0, normal -z
-        {{0, 0, n}, {1, 0, 0}, {0, 1, 0}},  // z = side, +z
-        {{0, 0, 0}, {0, 0, 1}, {0, 1, 0}},  // x = 0, -x
-        {{n, 0, 0}, {0, 1, 0}, {0, 0, 1}},  // x = side, +x
-        {{0, 0, 0}, {1, 0, 0}, {0, 0, 1}},  // y = 0, -y
-        {{0, n, 0}, {0, 0, 1}, {1, 0, 0}},  // y = side, +y
-    }};
-
-    // Vertex ids: face by face, row by row; vertices on cube edges are shared through a
-    // map keyed by their lattice position.
-    const std::size_t gridSize = std::size_t(n + 1) * std::size_t(n + 1);
-    std::vector<std::uint32_t> grid(6 * gridSize);
-    std::vector<std::array<int, 3>> lattice;  // lattice position of each vertex
-    lattice.reserve(6 * std::size_t(n) * std::size_t(n) + 2);
-    std::unordered_map<std::uint64_t, std::uint32_t> shared;
-    const auto key = [n](const std::array<int, 3>& p) {
-        return (std::uint64_t(p[0]) * std::uint64_t(n + 1) + std::uint64_t(p[1])) * std::uint64_t(n + 1) +
-               std::uint64_t(p[2]);
-    };
-    for (int f = 0; f < 6; ++f) {
-        const Face& F = faces[std::size_t(f)];
-        for (int j = 0; j <= n; ++j)
-            for (int i = 0; i <= n; ++i) {
-                const std::array<int, 3> p = {F.origin[0] + i * F.u[0] + j * F.v[0],
-                                              F.origin[1] + i * F.u[1] + j * F.v[1],
-                                              F.origin[2] + i * F.u[2] + j * F.v[2]};
-                std::uint32_t id;
-                if (i == 0 || j == 0 || i == n || j == n) {
-                    const auto [it, inserted] = shared.emplace(key(p), std::uint32_t(lattice.size()));
-                    if (inserted) lattice.push_back(p);
-                    id = it->second;
-                } else {
-                    id = std::uint32_t(lattice.size());
-                    lattice.push_back(p);
-                }
-                grid[std::size_t(f) * gridSize + std::size_t(j) * std::size_t(n + 1) + std::size_t(i)] = id;
-            }
-    }
-
-    // Coordinates on a cube face or edge (0 < p < n) are free and jittered: in a disc for
-    // face vertices, along the edge for edge vertices; 0 and n stay exact.
+    const BoxLattice box = makeBoxLattice({n, n, n});
     TriMesh mesh;
-    mesh.points.resize(lattice.size());
-    const double step = side / n;
-    const std::uint64_t seed = options.seed;
-    tbb::parallel_for(std::size_t(0), lattice.size(), [&](std::size_t id) {
-        const auto& p = lattice[id];
-        const std::uint64_t h = hashKey(seed, kStreamJitter, key(p));
-        std::array<double, 2> d = unitDiscPoint(h);
-        int freeAxes = 0;
-        for (int a = 0; a < 3; ++a) freeAxes += (p[std::size_t(a)] > 0 && p[std::size_t(a)] < n);
-        if (freeAxes == 1) d[0] = signedUnit(h);
-        Vec3 q;
-        int used = 0;
-        for (int a = 0; a < 3; ++a) {
-            const int pa = p[std::size_t(a)];
-            q[a] = latticeCoord(pa, n, side);
-            if (pa > 0 && pa < n) q[a] += kJitter * step * d[std::size_t(used++)];
-        }
-        mesh.points[id] = q;
-    });
-
-    mesh.triangles.resize(6 * 2 * std::size_t(n) * std::size_t(n));
-    for (int f = 0; f < 6; ++f) {
-        const std::uint32_t* g = grid.data() + std::size_t(f) * gridSize;
-        const auto index = [g, n](int i, int j) { return g[std::size_t(j) * std::size_t(n + 1) + std::size_t(i)]; };
-        triangulateGrid(mesh.points, n, n, index, seed, kStreamCubeDiagonal + std::uint64_t(f), false,
-                        mesh.triangles.data() + std::size_t(f) * 2 * std::size_t(n) * std::size_t(n));
-    }
+    mesh.points = jitteredBoxPoints(box, {options.side, options.side, options.side}, options.seed);
+    mesh.triangles = boxTriangles(box, mesh.points, options.seed);
     return mesh;
+}
+
+namespace {
+
+/// A side of the rounded tablet: its outward axis (x 0, y 1, z 2) and sign, and the two
+/// axes of its face.
+struct SideAxes {
+    int axis, sign, u, v;
+};
+constexpr std::array<SideAxes, 6> kSideAxes = {{
+    {2, +1, 0, 1},  // obverse, +z
+    {2, -1, 0, 1},  // reverse, -z
+    {1, +1, 0, 2},  // top, +y
+    {1, -1, 0, 2},  // bottom, -y
+    {0, -1, 1, 2},  // left, -x
+    {0, +1, 1, 2},  // right, +x
+}};
+
+/// A mark's place before it is pressed in: the side and the face coordinates of its centre.
+struct MarkPlace {
+    std::size_t side;
+    double u, v;
+};
+
+/// The marks' centres: per side, its count on a grid of cells over the flat part of the
+/// face (the part the rounding leaves flat, less a mark's radius and a margin), each at its
+/// cell's centre moved by up to 15 % of the cell.
+/// @throw InvalidInputError if they do not fit.
+std::vector<MarkPlace> placeMarks(const RoundedTabletOptions& o, const std::array<double, 3>& inner)
+{
+    std::vector<MarkPlace> places;
+    const double margin = o.markRadius + 0.3 * o.markRadius;
+    for (std::size_t s = 0; s < 6; ++s) {
+        const int count = o.marks[s];
+        if (count < 0) throw InvalidInputError("sample mesh: a side's number of marks must not be negative.");
+        if (count == 0) continue;
+        const SideAxes& a = kSideAxes[s];
+        const double lu = 2 * (inner[std::size_t(a.u)] - margin), lv = 2 * (inner[std::size_t(a.v)] - margin);
+        int cols = std::clamp(int(std::lround(std::sqrt(count * std::max(lu, 0.0) / std::max(lv, 1e-9)))), 1, count);
+        const int rows = (count + cols - 1) / cols;
+        const double cu = lu / cols, cv = lv / rows;
+        const bool fits = lu >= 0 && lv >= 0 && (cols == 1 || cu >= 2.2 * o.markRadius) &&
+                          (rows == 1 || cv >= 2.2 * o.markRadius);
+        if (!fits)
+            throw InvalidInputError("sample mesh: " + std::to_string(count) +
+                                    " marks do not fit on a side of the tablet; make it larger, its rounding or its "
+                                    "marks smaller, or use fewer marks.");
+        for (int k = 0; k < count; ++k) {
+            const std::uint64_t h = hashKey(o.seed, kStreamMarks, s, std::uint64_t(k));
+            const double ju = 0.15 * signedUnit(h), jv = 0.15 * signedUnit(mix64(h));
+            places.push_back({s, -0.5 * lu + cu * (k % cols + 0.5 + (cols > 1 ? ju : 0)),
+                              -0.5 * lv + cv * (k / cols + 0.5 + (rows > 1 ? jv : 0))});
+        }
+    }
+    return places;
+}
+
+/// The depth of the marks at face coordinates (u, v) of side @p s: a smooth round pit
+/// depth (1 − d²/r²)² within the mark's radius r of its centre.
+double markDepthAt(const std::vector<MarkPlace>& places, const RoundedTabletOptions& o, std::size_t s, double u,
+                   double v)
+{
+    double depth = 0;
+    for (const MarkPlace& m : places) {
+        if (m.side != s) continue;
+        const double d2 = ((u - m.u) * (u - m.u) + (v - m.v) * (v - m.v)) / (o.markRadius * o.markRadius);
+        if (d2 < 1) depth = std::max(depth, o.markDepth * (1 - d2) * (1 - d2));
+    }
+    return depth;
+}
+
+void validate(const RoundedTabletOptions& o)
+{
+    requirePositive(o.width, "width");
+    requirePositive(o.height, "height");
+    requirePositive(o.thickness, "thickness");
+    requirePositive(o.rounding, "rounding");
+    requirePositive(o.spacing, "spacing");
+    requirePositive(o.markRadius, "mark radius");
+    requireNonNegative(o.markDepth, "mark depth");
+    requireNonNegative(o.obverseBulge, "obverse bulge");
+    requireNonNegative(o.reverseBulge, "reverse bulge");
+    requireNonNegative(o.roughness, "roughness");
+    if (!(2 * o.rounding < std::min({o.width, o.height, o.thickness})))
+        throw InvalidInputError("sample mesh: the rounding must be less than half the tablet's smallest side.");
+    if (!(o.markDepth < o.rounding)) throw InvalidInputError("sample mesh: the marks must be shallower than the rounding.");
+}
+
+} // namespace
+
+const char* tabletSideName(TabletSide side)
+{
+    static const char* const names[] = {"obverse", "reverse", "top", "bottom", "left", "right"};
+    return names[int(side)];
+}
+
+RoundedTablet makeRoundedTablet(const RoundedTabletOptions& o)
+{
+    validate(o);
+    const std::array<double, 3> size = {o.width, o.height, o.thickness};
+    const std::array<double, 3> half = {0.5 * o.width, 0.5 * o.height, 0.5 * o.thickness};
+    const std::array<double, 3> inner = {half[0] - o.rounding, half[1] - o.rounding, half[2] - o.rounding};
+    const std::vector<MarkPlace> places = placeMarks(o, inner);
+    const std::array<int, 3> n = {latticeCells(size[0], o.spacing), latticeCells(size[1], o.spacing),
+                                  latticeCells(size[2], o.spacing)};
+    requireVertexCount(2.0 * (double(n[0]) * n[1] + double(n[1]) * n[2] + double(n[0]) * n[2]) + 2.0);
+    const BoxLattice box = makeBoxLattice(n);
+    const std::vector<Vec3> lattice = jitteredBoxPoints(box, size, o.seed);
+
+    // Each point of the box's surface goes to the rounded box: the closest point of the
+    // inner box plus the rounding radius in the direction from it (the normal there).
+    RoundedTablet tablet;
+    tablet.mesh.points.resize(lattice.size());
+    const auto bulge = [&](const Vec3& p) {  // the faces' rise, 0 along the edges
+        const double fx = 1 - (p.x / half[0]) * (p.x / half[0]), fy = 1 - (p.y / half[1]) * (p.y / half[1]);
+        return std::max(fx, 0.0) * std::max(fy, 0.0) * (p.z >= 0 ? o.obverseBulge : o.reverseBulge) / half[2];
+    };
+    tbb::parallel_for(std::size_t(0), lattice.size(), [&](std::size_t id) {
+        const Vec3 q(lattice[id].x - half[0], lattice[id].y - half[1], lattice[id].z - half[2]);
+        const Vec3 core(std::clamp(q.x, -inner[0], inner[0]), std::clamp(q.y, -inner[1], inner[1]),
+                        std::clamp(q.z, -inner[2], inner[2]));
+        const Vec3 normal = normalized(q - core);
+        Vec3 p = core + normal * o.rounding;
+        p.z += p.z * bulge(p);
+        // On a flat part of a side (the normal along its axis): the marks pressed in.
+        for (std::size_t s = 0; s < 6; ++s) {
+            const SideAxes& a = kSideAxes[s];
+            if (normal[a.axis] != a.sign) continue;
+            p[a.axis] -= a.sign * markDepthAt(places, o, s, q[a.u], q[a.v]);
+        }
+        if (o.roughness > 0) p += normal * (o.roughness * signedUnit(hashKey(o.seed, kStreamRoughness, box.key(box.points[id]))));
+        tablet.mesh.points[id] = p;
+    });
+    tablet.mesh.triangles = boxTriangles(box, tablet.mesh.points, o.seed);
+
+    for (const MarkPlace& m : places) {
+        const SideAxes& a = kSideAxes[m.side];
+        TabletMark mark;
+        mark.side = TabletSide(m.side);
+        mark.centre[a.axis] = a.sign * half[std::size_t(a.axis)];
+        mark.centre[a.u] = m.u;
+        mark.centre[a.v] = m.v;
+        mark.centre.z += mark.centre.z * bulge(mark.centre);
+        mark.normal[a.axis] = a.sign;
+        mark.radius = o.markRadius;
+        mark.depth = o.markDepth;
+        tablet.marks.push_back(mark);
+    }
+    return tablet;
 }
 
 // ---------------------------------------------------------------------------------------

@@ -14,6 +14,7 @@
 /// written).
 
 #include <msii/core/errors.h>
+#include <msii/io/atomic_file.h>
 #include <msii/io/write_ply.h>
 #include <msii/samples/generators.h>
 #include <msii/terrain/raster_output.h>
@@ -38,13 +39,14 @@ struct ShapeInfo {
     const char* description;
 };
 
-constexpr std::array<ShapeInfo, 6> kShapes = {{
+constexpr std::array<ShapeInfo, 7> kShapes = {{
     {"sphere", "closed sphere (jittered geodesic icosphere), vertices exactly on it; --radius, --center"},
     {"cavity", "the sphere with reversed orientation: the solid is outside (a spherical cavity)"},
     {"cube", "closed cube [0, side]^3, irregularly triangulated faces; --side"},
     {"plane", "flat open patch z = 0 over [0, width] x [0, height] (--closed: a slab)"},
     {"terrain", "smooth random hills and valleys, amplitude ~ --relief (--closed: a slab)"},
     {"tablet", "curved clay-tablet face with cuneiform wedge impressions (--closed: a slab)"},
+    {"rounded-tablet", "a whole tablet, closed: rounded box, bulging reverse, marks on all six sides; --marks-csv"},
 }};
 
 /// A usage error found after parsing (exit code 2).
@@ -77,10 +79,10 @@ int fail(int code, const std::string& message)
 /// The command line: the values given, and the options themselves, which tell whether a
 /// value was given.
 struct Arguments {
-    std::string shape, output, centerText, offsetText, crs = "EPSG:25832";
+    std::string shape, output, centerText, offsetText, crs = "EPSG:25832", marksText, marksCsv;
     double spacing = 0, radius = 0, side = 0, width = 0, height = 0, thickness = 0, relief = 0, noise = 0;
     double wedgeSize = 0, wedgeDensity = 0, holeSize = 0, wallStep = 0, anisotropy = 1, densityVariation = 1;
-    double roughness = 0, hillWidth = 0;
+    double roughness = 0, hillWidth = 0, rounding = 0, reverseBulge = 0, markRadius = 0, markDepth = 0;
     std::size_t holes = 0;
     std::uint64_t seed = 1;
     bool closed = false, cavity = false, ascii = false, doublePoints = false, quiet = false, list = false;
@@ -91,6 +93,8 @@ struct Arguments {
     CLI::Option *optRoughness = nullptr, *optWallStep = nullptr, *optRelief = nullptr, *optHillWidth = nullptr;
     CLI::Option *optNoise = nullptr, *optWedgeSize = nullptr, *optWedgeDensity = nullptr, *optHoleSize = nullptr;
     CLI::Option *optGeotiff = nullptr, *optCrs = nullptr;
+    CLI::Option *optRounding = nullptr, *optReverseBulge = nullptr, *optMarks = nullptr, *optMarkRadius = nullptr;
+    CLI::Option *optMarkDepth = nullptr, *optMarksCsv = nullptr;
 };
 
 void addOptions(CLI::App& app, Arguments& a)
@@ -118,16 +122,30 @@ void addOptions(CLI::App& app, Arguments& a)
                                  "coordinates, as georeferenced scans come (written in double precision)");
     a.optCavity = app.add_flag("--cavity", a.cavity, "sphere: reverse the orientation (same as shape cavity)");
     a.optSide = app.add_option("--side", a.side, "cube: edge length, mm (default 10)");
-    a.optWidth = app.add_option("--width", a.width, "plane/terrain/tablet: extent along x, mm (default 20)");
-    a.optHeight = app.add_option("--height", a.height, "plane/terrain/tablet: extent along y, mm (default 15)");
+    a.optWidth = app.add_option("--width", a.width,
+                                "plane/terrain/tablet: extent along x, mm (default 20; rounded-tablet 24)");
+    a.optHeight = app.add_option("--height", a.height,
+                                 "plane/terrain/tablet: extent along y, mm (default 15; rounded-tablet 32)");
     a.optClosed = app.add_flag("--closed", a.closed, "plane/terrain/tablet: closed slab instead of an open patch");
-    a.optThickness = app.add_option("--thickness", a.thickness, "slab thickness below z = 0, mm (default 5)");
+    a.optThickness = app.add_option("--thickness", a.thickness,
+                                    "slab thickness below z = 0, mm (default 5); rounded-tablet: along z (default 10)");
+    a.optRounding = app.add_option("--rounding", a.rounding, "rounded-tablet: radius of edges and corners, mm (default 2.5)");
+    a.optReverseBulge = app.add_option("--reverse-bulge", a.reverseBulge,
+                                       "rounded-tablet: rise of the reverse's centre, mm (default 1.5; the obverse's is 0.1)");
+    a.optMarks = app.add_option("--marks", a.marksText,
+                                "rounded-tablet: marks on the obverse, reverse, top, bottom, left and right sides "
+                                "(default 6,5,1,2,4,3)");
+    a.optMarkRadius = app.add_option("--mark-radius", a.markRadius, "rounded-tablet: radius of a mark, mm (default 1)");
+    a.optMarkDepth = app.add_option("--mark-depth", a.markDepth, "rounded-tablet: depth of a mark, mm (default 0.4)");
+    a.optMarksCsv = app.add_option("--marks-csv", a.marksCsv,
+                                   "rounded-tablet: also write the marks as CSV (side,x,y,z,nx,ny,nz,radius,depth)");
     a.optAnisotropy = app.add_option("--anisotropy", a.anisotropy,
                                      "plane/terrain/tablet: triangles this many times longer along x than y (default 1)");
     a.optDensity = app.add_option("--density-variation", a.densityVariation,
                                   "plane/terrain/tablet: densest / sparsest vertex density, varying smoothly (default 1)");
     a.optRoughness = app.add_option("--roughness", a.roughness,
-                                    "plane/terrain/tablet: white scanner noise, z moved by up to this, mm (default 0)");
+                                    "plane/terrain/tablet: white scanner noise, z moved by up to this, mm (default 0); "
+                                    "rounded-tablet: along the normal");
     a.optWallStep = app.add_option("--wall-step", a.wallStep,
                                    "with --closed: walls and bottom of a few long triangles, bottom outline vertices "
                                    "this far apart, mm (as many meshers make them; default: as fine as the top)");
@@ -157,21 +175,29 @@ void addOptions(CLI::App& app, Arguments& a)
 /// shape (rejected rather than silently ignored), and for options that need another.
 void checkUsage(const Arguments& a)
 {
-    if (a.shape.empty()) throw UsageError("a SHAPE is required (one of sphere, cavity, cube, plane, terrain, tablet; see --list)");
+    if (a.shape.empty())
+        throw UsageError("a SHAPE is required (one of sphere, cavity, cube, plane, terrain, tablet, rounded-tablet; "
+                         "see --list)");
     if (a.output.empty()) throw UsageError("--output FILE.ply is required");
     const std::map<const CLI::Option*, std::set<std::string>> applies = {
         {a.optRadius, {"sphere", "cavity"}},
         {a.optCenter, {"sphere", "cavity"}},
         {a.optCavity, {"sphere", "cavity"}},
         {a.optSide, {"cube"}},
-        {a.optWidth, {"plane", "terrain", "tablet"}},
-        {a.optHeight, {"plane", "terrain", "tablet"}},
+        {a.optWidth, {"plane", "terrain", "tablet", "rounded-tablet"}},
+        {a.optHeight, {"plane", "terrain", "tablet", "rounded-tablet"}},
         {a.optClosed, {"plane", "terrain", "tablet"}},
-        {a.optThickness, {"plane", "terrain", "tablet"}},
+        {a.optThickness, {"plane", "terrain", "tablet", "rounded-tablet"}},
         {a.optWallStep, {"plane", "terrain", "tablet"}},
         {a.optAnisotropy, {"plane", "terrain", "tablet"}},
         {a.optDensity, {"plane", "terrain", "tablet"}},
-        {a.optRoughness, {"plane", "terrain", "tablet"}},
+        {a.optRoughness, {"plane", "terrain", "tablet", "rounded-tablet"}},
+        {a.optRounding, {"rounded-tablet"}},
+        {a.optReverseBulge, {"rounded-tablet"}},
+        {a.optMarks, {"rounded-tablet"}},
+        {a.optMarkRadius, {"rounded-tablet"}},
+        {a.optMarkDepth, {"rounded-tablet"}},
+        {a.optMarksCsv, {"rounded-tablet"}},
         {a.optRelief, {"terrain"}},
         {a.optHillWidth, {"terrain"}},
         {a.optNoise, {"terrain", "tablet"}},
@@ -182,7 +208,8 @@ void checkUsage(const Arguments& a)
     for (const auto& [opt, shapes] : applies)
         if (opt->count() > 0 && shapes.count(a.shape) == 0)
             throw UsageError("option " + opt->get_name() + " does not apply to shape " + a.shape);
-    if (a.optThickness->count() > 0 && !a.closed) throw UsageError("--thickness needs --closed");
+    if (a.optThickness->count() > 0 && !a.closed && a.shape != "rounded-tablet")
+        throw UsageError("--thickness needs --closed");
     if (a.optWallStep->count() > 0 && !a.closed) throw UsageError("--wall-step needs --closed");
     if (a.optCrs->count() > 0 && !a.geotiff) throw UsageError("--crs needs --geotiff");
     if (a.geotiff && (a.closed || a.ascii || a.doublePoints || a.anisotropy != 1 || a.densityVariation != 1 ||
@@ -212,6 +239,47 @@ msii::TriMesh cubeMesh(const Arguments& a, std::ostringstream& comment)
     o.seed = a.seed;
     comment << " side " << o.side << " spacing " << o.spacing;
     return msii::samples::makeCube(o);
+}
+
+/// A rounded tablet, said in @p comment; its marks written to --marks-csv.
+msii::TriMesh roundedTabletMesh(const Arguments& a, std::ostringstream& comment)
+{
+    msii::samples::RoundedTabletOptions o;
+    if (a.optSpacing->count()) o.spacing = a.spacing;
+    if (a.optWidth->count()) o.width = a.width;
+    if (a.optHeight->count()) o.height = a.height;
+    if (a.optThickness->count()) o.thickness = a.thickness;
+    if (a.optRounding->count()) o.rounding = a.rounding;
+    if (a.optReverseBulge->count()) o.reverseBulge = a.reverseBulge;
+    if (a.optMarkRadius->count()) o.markRadius = a.markRadius;
+    if (a.optMarkDepth->count()) o.markDepth = a.markDepth;
+    if (a.optMarks->count()) {
+        std::istringstream in(a.marksText);
+        std::string item;
+        std::size_t k = 0;
+        while (std::getline(in, item, ',')) {
+            if (k >= 6 || item.empty() || item.find_first_not_of("0123456789") != std::string::npos || item.size() > 4)
+                throw UsageError("--marks takes six counts, e.g. 6,5,1,2,4,3 (got '" + a.marksText + "')");
+            o.marks[k++] = std::stoi(item);
+        }
+        if (k != 6) throw UsageError("--marks takes six counts, e.g. 6,5,1,2,4,3 (got '" + a.marksText + "')");
+    }
+    o.roughness = a.roughness;
+    o.seed = a.seed;
+    comment << " width " << o.width << " height " << o.height << " thickness " << o.thickness << " rounding "
+            << o.rounding << " spacing " << o.spacing;
+    msii::samples::RoundedTablet tablet = msii::samples::makeRoundedTablet(o);
+    if (!a.marksCsv.empty()) {
+        std::ostringstream csv;
+        csv.precision(17);
+        csv << "side,x,y,z,nx,ny,nz,radius,depth\n";
+        for (const msii::samples::TabletMark& m : tablet.marks)
+            csv << msii::samples::tabletSideName(m.side) << ',' << m.centre.x << ',' << m.centre.y << ','
+                << m.centre.z << ',' << m.normal.x << ',' << m.normal.y << ',' << m.normal.z << ',' << m.radius
+                << ',' << m.depth << '\n';
+        msii::writeTextFileAtomic(a.marksCsv, csv.str());
+    }
+    return std::move(tablet.mesh);
 }
 
 /// The options of a plane, terrain or tablet, said in @p comment.
@@ -297,6 +365,7 @@ void addHoles(msii::TriMesh& mesh, const Arguments& a, std::ostringstream& comme
     const double step = a.optSpacing->count()                          ? a.spacing
                         : a.shape == "sphere" || a.shape == "cavity" ? msii::samples::SphereOptions{}.spacing
                         : a.shape == "cube"                          ? msii::samples::CubeOptions{}.spacing
+                        : a.shape == "rounded-tablet" ? msii::samples::RoundedTabletOptions{}.spacing
                                                                      : msii::samples::HeightFieldOptions{}.spacing;
     ho.maxSize = a.optHoleSize->count() ? a.holeSize : 2.0 * step;
     ho.minSize = 0.25 * ho.maxSize;
@@ -334,6 +403,8 @@ int generate(const Arguments& a)
         mesh = sphereMesh(a, comment);
     } else if (a.shape == "cube") {
         mesh = cubeMesh(a, comment);
+    } else if (a.shape == "rounded-tablet") {
+        mesh = roundedTabletMesh(a, comment);
     } else {
         const msii::samples::HeightFieldOptions o = heightFieldOptions(a, comment);
         if (a.geotiff) return writeDem(o, a, comment.str());
@@ -370,7 +441,7 @@ int main(int argc, char** argv)
     }
 
     if (a.list) {
-        for (const auto& s : kShapes) std::cout << s.name << std::string(10 - std::string(s.name).size(), ' ') << s.description << '\n';
+        for (const auto& s : kShapes) std::cout << s.name << std::string(16 - std::string(s.name).size(), ' ') << s.description << '\n';
         return 0;
     }
 

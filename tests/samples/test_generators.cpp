@@ -300,6 +300,69 @@ TEST(SampleCube, CornersEdgesAndFacesExact)
 }
 
 // ---------------------------------------------------------------------------------------
+// Rounded tablet
+// ---------------------------------------------------------------------------------------
+
+TEST(SampleRoundedTablet, ClosedOutwardWithTheMarksWhereItSaysAndABulgingReverse)
+{
+    RoundedTabletOptions o;
+    o.spacing = 0.3;
+    o.roughness = 0.005;
+    const RoundedTablet tablet = makeRoundedTablet(o);
+    expectWatertight(tablet.mesh, "rounded tablet");
+    // Outward, and the volume of the rounded box (the box less its edges' and corners'
+    // rounding) within the bulges' and the marks' share: a face rising by b (1 − x²/a²)(1 − y²/b²)
+    // adds less than 4/9 b w h, a mark takes less than π r² depth.
+    const double r = o.rounding, w = o.width, h = o.height, t = o.thickness;
+    const double box = w * h * t - (4 - kPi) * r * r * (w + h + t - 6 * r) - (8 - 4.0 / 3.0 * kPi) * r * r * r;
+    const double bulges = (o.obverseBulge + o.reverseBulge) * w * h * 4.0 / 9.0;
+    const double marks = double(tablet.marks.size()) * kPi * o.markRadius * o.markRadius * o.markDepth;
+    EXPECT_GT(signedVolume(tablet.mesh), box - marks);
+    EXPECT_LT(signedVolume(tablet.mesh), box + bulges);
+    EXPECT_GT(signedVolume(tablet.mesh), box + 0.25 * bulges);  // the bulges are there
+    // A different number of marks on each side, as asked.
+    std::array<int, 6> count{};
+    for (const TabletMark& m : tablet.marks) ++count[std::size_t(m.side)];
+    EXPECT_EQ(count, o.marks);
+    // Each mark is pressed in: the surface's deepest point within its radius lies its depth
+    // below its centre, within the noise and the lattice (the vertex nearest the axis, less
+    // than a spacing away, lies at most (1 − (s/r)²)² of the depth down).
+    for (const TabletMark& m : tablet.marks) {
+        SCOPED_TRACE(tabletSideName(m.side));
+        double deepest = 0, nearestAxis = 1e9;
+        for (const Vec3& p : tablet.mesh.points) {
+            const Vec3 d = p - m.centre;
+            const double along = dot(d, m.normal), across = norm(d - m.normal * along);
+            if (across < m.radius && std::abs(along) < 2 * m.depth) deepest = std::min(deepest, along);
+            if (across < nearestAxis && std::abs(along) < 2 * m.depth) nearestAxis = across;
+        }
+        EXPECT_LT(nearestAxis, o.spacing);
+        const double lattice = 1 - std::pow(1 - std::pow(o.spacing / m.radius, 2), 2);
+        EXPECT_LE(deepest, -(1 - lattice) * m.depth + o.roughness);
+        EXPECT_GE(deepest, -m.depth - o.roughness);
+    }
+    // The reverse bulges more than the obverse rises: its centre lies further from the middle.
+    double top = 0, bottom = 0;
+    for (const Vec3& p : tablet.mesh.points)
+        if (std::abs(p.x) < 0.5 && std::abs(p.y) < 0.5) top = std::max(top, p.z), bottom = std::min(bottom, p.z);
+    EXPECT_NEAR(top, 0.5 * t + o.obverseBulge, 0.02 + o.roughness);
+    EXPECT_NEAR(bottom, -0.5 * t - o.reverseBulge, 0.02 + o.roughness);
+}
+
+TEST(SampleRoundedTablet, MarksThatDoNotFitAreRefused)
+{
+    RoundedTabletOptions o;
+    o.marks = {6, 5, 1, 2, 40, 3};
+    EXPECT_THROW(makeRoundedTablet(o), InvalidInputError);
+    o = {};
+    o.rounding = 5.0;
+    EXPECT_THROW(makeRoundedTablet(o), InvalidInputError);
+    o = {};
+    o.marks[0] = -1;
+    EXPECT_THROW(makeRoundedTablet(o), InvalidInputError);
+}
+
+// ---------------------------------------------------------------------------------------
 // Height fields
 // ---------------------------------------------------------------------------------------
 
@@ -561,6 +624,18 @@ std::vector<TriMesh> allSamples(std::uint64_t seed)
             h.seed = seed;
             meshes.push_back(makeHeightField(h));
         }
+    RoundedTabletOptions t;
+    t.width = 6.0;
+    t.height = 8.0;
+    t.thickness = 4.0;
+    t.rounding = 1.0;
+    t.markRadius = 0.3;
+    t.markDepth = 0.1;
+    t.marks = {2, 2, 1, 1, 1, 1};
+    t.spacing = 0.2;
+    t.roughness = 0.01;
+    t.seed = seed;
+    meshes.push_back(makeRoundedTablet(t).mesh);
     return meshes;
 }
 
@@ -605,6 +680,7 @@ TEST(SampleDeterminism, GoldenFingerprints)
         0xe735cd1ac3f56f6fULL,  // terrain slab
         0x957d88e48e3d503cULL,  // tablet
         0x0d8867b97a6afea1ULL,  // tablet slab
+        0x853f7ddef1f99e1fULL,  // rounded tablet
     };
     ASSERT_EQ(meshes.size(), std::size(expected));
     for (std::size_t i = 0; i < meshes.size(); ++i)
@@ -739,9 +815,9 @@ TEST(SampleCli, ListsTheShapes)
     const RunResult r = runSamples("--list");
     EXPECT_EQ(r.code, 0);
     const std::string lines = "\n" + r.out;
-    for (const char* shape : {"sphere", "cavity", "cube", "plane", "terrain", "tablet"})
+    for (const char* shape : {"sphere", "cavity", "cube", "plane", "terrain", "tablet", "rounded-tablet"})
         EXPECT_NE(lines.find(std::string("\n") + shape + " "), std::string::npos) << shape;
-    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 6);
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 7);
 }
 
 TEST(SampleCli, HelpExitsZero)

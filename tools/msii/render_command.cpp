@@ -6,6 +6,7 @@
 #include "feature_input.h"
 #include "compute_args.h"
 #include "map_input.h"
+#include "render_args.h"
 
 #include <msii/core/terminal_progress.h>
 #include <msii/core/errors.h>
@@ -30,29 +31,6 @@ namespace msii::tools {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct RenderArgs : CommonArgs {
-    std::string input, output;
-    std::vector<std::string> matFiles;
-    ViewArgs view;
-    std::string show;  // a property/channel, "relief" or "height"; empty: quality, else relief
-    std::string colorMap;
-    std::string range, percentiles = "1,99";
-    double center = 0;
-    CLI::Option* centerOption = nullptr;
-    int isolines = 0;
-    std::string levels;
-    std::string light = "315,45";
-    bool highContrast = false;
-    int contrastRadius = 16;
-    bool shade = false;
-    double shadeStrength = 0.6;
-    bool noColorBar = false, noScaleBar = false;
-    std::string units;
-    std::string font;  // --font: a TrueType/OpenType file; empty: MSII_FONT, then fontconfig
-};
-
-constexpr int kDefaultPixels = 2048;
 
 /// The channels of the picture, from an EXR map or a rasterised mesh.
 struct Channels {
@@ -79,7 +57,7 @@ Channels channelsFromMap(const std::string& path, const std::string& value, bool
     FeatureMapImage map = readFeatureMap(path, wanted);
     Channels c;
     c.width = map.width, c.height = map.height;
-    c.pixelSize = map.hasFrame ? map.frame.pixelSize : 0;
+    c.pixelSize = map.frame.pixelSize;  // also a sheet's, which has no single frame
     if (!map.units.empty()) c.units = map.units;
     const std::vector<std::string>& names = map.channelNames;
     for (const std::string& w : wanted) {
@@ -231,14 +209,10 @@ Channels channelsFromRaster(const std::string& path, const std::string& value, b
     return c;
 }
 
-int runRender(const RenderArgs& args)
+} // namespace
+
+PictureOptions pictureOptionsOf(const RenderArgs& args)
 {
-    const Stopwatch total;
-    const bool isMap = fs::path(args.input).extension() == ".exr";
-    const bool isRaster = !isMap && isRasterInput(args.input);
-    // What to show: relief (grey shading), height (Fig. 7c) or a value; default quality for
-    // feature files, relief for plain meshes.
-    std::string show = args.show;
     PictureOptions options;
     if (!args.colorMap.empty()) options.colorMap = parseColorMap(args.colorMap);
     const std::vector<double> light = parseNumberList(args.light, "--light");
@@ -267,6 +241,57 @@ int runRender(const RenderArgs& args)
         if (!std::isfinite(args.center)) throw InvalidInputError("--center must be a finite number");
         options.centered = true, options.center = args.center;
     }
+    return options;
+}
+
+std::string shownValue(const RenderArgs& args, bool hasQuality, PictureOptions& options)
+{
+    const std::string show = args.show.empty() ? (hasQuality ? "quality" : "relief") : args.show;
+    if (show == "relief") {
+        if (!args.show.empty() && (args.isolines > 0 || !args.levels.empty() || !args.range.empty() ||
+                                   !args.colorMap.empty() || options.centered || args.shade))
+            throw InvalidInputError("--show relief is grey shading: --isolines, --levels, --range, --colormap, "
+                                    "--center and --shade apply to values (e.g. --show quality --shade)");
+        options.colour = false;
+        options.shade = true;
+        return "";
+    }
+    options.shade = args.shade;
+    return show;
+}
+
+FontResult labelsFont(const RenderArgs& args)
+{
+    FontOptions fo;
+    fo.file = args.font;
+    FontResult font = findFont(fo);
+    if (!font.warning.empty() && !args.quiet)
+        std::fprintf(stderr, "msii: warning: %s (--font FILE names a font)\n", font.warning.c_str());
+    return font;
+}
+
+void setLabelsFont(FigureOptions& figure, const FontResult& font, int pictureHeight)
+{
+    if (!font.typeface.isBuiltIn()) {
+        figure.typeface = &font.typeface;
+        figure.lineHeight = labelLineHeight(pictureHeight);
+    } else {
+        figure.fontScale = std::max(1, labelLineHeight(pictureHeight) / 9);
+    }
+}
+
+namespace {
+
+int runRender(const RenderArgs& args)
+{
+    const Stopwatch total;
+    const std::string& input = args.inputs.front();
+    const bool isMap = fs::path(input).extension() == ".exr";
+    const bool isRaster = !isMap && isRasterInput(input);
+    // What to show: relief (grey shading), height (Fig. 7c) or a value; default quality for
+    // feature files, relief for plain meshes.
+    std::string show = args.show;
+    PictureOptions options = pictureOptionsOf(args);
 
     TerminalProgress terminal(progressStyle(args));
     RunContext progress(terminal.listener());
@@ -275,25 +300,15 @@ int runRender(const RenderArgs& args)
     const bool automatic = show.empty();
     const std::string wanted = automatic ? "quality" : show == "relief" ? "" : show;
     const bool needNormals = show == "relief" || args.shade;
-    Channels ch = isMap      ? channelsFromMap(args.input, wanted, needNormals, automatic)
-                  : isRaster ? channelsFromRaster(args.input, wanted, needNormals,
+    Channels ch = isMap      ? channelsFromMap(input, wanted, needNormals, automatic)
+                  : isRaster ? channelsFromRaster(input, wanted, needNormals,
                                                   args.view.pixels > 0 ? args.view.pixels : kDefaultPixels, automatic,
                                                   args.quiet)
-                             : channelsFromMesh(args.input, args.matFiles, args.view, wanted, needNormals, &progress, automatic);
-    if (automatic) show = ch.data.count("quality") ? "quality" : "relief";
-    if (show == "relief") {
-        if (!args.show.empty() && (args.isolines > 0 || !args.levels.empty() || !args.range.empty() ||
-                                   !args.colorMap.empty() || options.centered || args.shade))
-            throw InvalidInputError("--show relief is grey shading: --isolines, --levels, --range, --colormap, "
-                                    "--center and --shade apply to values (e.g. --show quality --shade)");
-        options.colour = false;
-        options.shade = true;
-    } else {
-        value = show;
-        options.shade = args.shade;
-    }
+                             : channelsFromMesh(input, args.matFiles, args.view, wanted, needNormals, &progress, automatic);
+    value = shownValue(args, ch.data.count("quality") > 0, options);
+    show = value.empty() ? "relief" : value;
     if (!args.units.empty()) ch.units = args.units;
-    const std::string output = outputPath(args.input, args.output, show, args.overwrite, ".png");
+    const std::string output = outputPath(input, args.output, show, args.overwrite, ".png");
 
     PictureChannels pc;
     pc.width = ch.width, pc.height = ch.height;
@@ -309,17 +324,8 @@ int runRender(const RenderArgs& args)
     FigureOptions figure;
     FontResult font;
     if (!args.noColorBar || !args.noScaleBar) {
-        FontOptions fo;
-        fo.file = args.font;
-        font = findFont(fo);
-        if (!font.warning.empty() && !args.quiet)
-            std::fprintf(stderr, "msii: warning: %s (--font FILE names a font)\n", font.warning.c_str());
-        if (!font.typeface.isBuiltIn()) {
-            figure.typeface = &font.typeface;
-            figure.lineHeight = labelLineHeight(picture.image.height);
-        } else {
-            figure.fontScale = std::max(1, labelLineHeight(picture.image.height) / 9);
-        }
+        font = labelsFont(args);
+        setLabelsFont(figure, font, picture.image.height);
     }
     figure.colorBar = options.colour && !args.noColorBar;
     figure.colorMap = options.colorMap;
@@ -332,7 +338,7 @@ int runRender(const RenderArgs& args)
     const RgbImage image = (figure.colorBar || figure.scaleBar) ? composeFigure(picture.image, figure) : picture.image;
     writePng(output, image);
     if (!args.quiet)
-        std::fprintf(stderr, "msii: %s -> %s (%d x %d pixels, %s%s, %.1f s)\n", args.input.c_str(), output.c_str(),
+        std::fprintf(stderr, "msii: %s -> %s (%d x %d pixels, %s%s, %.1f s)\n", input.c_str(), output.c_str(),
                      image.width, image.height, show.c_str(),
                      options.colour ? (" in [" + std::to_string(picture.range.lo) + ", " +
                                        std::to_string(picture.range.hi) + "]").c_str()
@@ -350,10 +356,14 @@ std::function<int()> addRenderCommand(CLI::App& app)
         "render", "PNG picture of a feature PLY, a GeoTIFF from msii compute on a DEM, or an EXR map: "
                   "false colour of a value with isolines, "
                   "shaded relief (virtual illumination) or the height map, with colour bar and scale bar.");
-    cmd->add_option("input", args->input,
-                    "Mesh or feature PLY, a GeoTIFF from msii compute on a DEM, or an EXR map from msii map")
+    cmd->add_option("input", args->inputs,
+                    "Mesh or feature PLY, a GeoTIFF from msii compute on a DEM, or an EXR map from msii map; "
+                    "with --layout fat-cross, any number of meshes (a collection)")
         ->required();
-    cmd->add_option("-o,--output", args->output, "Output PNG (default <input stem>.<what>.png)");
+    cmd->add_option("-o,--output", args->output,
+                    "Output PNG (default <input stem>.<what>.png; a sheet: <input stem>.<what>.sheet.png)");
+    cmd->add_option("--output-dir", args->outputDir,
+                    "With --layout fat-cross: the folder for the sheets, their records and index.html");
     cmd->add_option("--mat", args->matFiles, "GigaMesh feature file(s) for the input mesh");
     cmd->add_option("--show", args->show,
                     "What to show: a vertex property or map channel (quality, V_16, f_cosine ...), "
@@ -384,9 +394,31 @@ std::function<int()> addRenderCommand(CLI::App& app)
                     "Font file (TrueType/OpenType) for the labels (default: environment MSII_FONT, then "
                     "DejaVu Sans through fontconfig, else a built-in pixel font with a warning)");
     addViewOptions(cmd, args->view, kDefaultPixels);
+    cmd->add_option("--layout", args->layout,
+                    "fat-cross: the six orthographic views on one sheet at one scale, the obverse in the centre, the "
+                    "edges folded out around it and the reverse below (docs/figures.md); with --pixels, the "
+                    "sheet's longer side")
+        ->check(CLI::IsMember({"fat-cross"}));
+    cmd->add_flag("--labels", args->labels, "With --layout: name the views obv., rev., t.e., b.e., l.e., r.e.");
+    cmd->add_option("--front", args->front,
+                    "With --layout: the direction X,Y,Z from the object towards a viewer of the obverse "
+                    "(default: along the axis of least extent, the flatter side)");
+    cmd->add_option("--up", args->up,
+                    "With --layout: the direction X,Y,Z that is up on the obverse (default: the longest axis)");
+    cmd->add_option("--orientation", args->orientationFile,
+                    "With --layout: take front, up (and, without a resolution, the pixel size) from a sheet's "
+                    "JSON record, to redo a sheet the same way");
+    cmd->add_flag("--views-separately", args->viewsSeparately,
+                  "With --layout: also write each view as its own PNG (<sheet>.obverse.png ...)");
     addCommonOptions(cmd, *args);
-    return [args]() {
+    return [args, cmd]() {
         const auto limit = limitThreads(args->threads);
+        if (!args->layout.empty()) return runSheets(*args);
+        if (args->inputs.size() > 1)
+            throw InvalidInputError("render takes one input, or several with --layout fat-cross (one sheet each)");
+        for (const char* option : {"--labels", "--front", "--up", "--orientation", "--views-separately", "--output-dir"})
+            if (cmd->count(option) > 0)
+                throw InvalidInputError(std::string(option) + " needs --layout fat-cross");
         return runRender(*args);
     };
 }

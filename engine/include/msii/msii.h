@@ -28,6 +28,7 @@
 #include <msii/mesh/mesh_check.h>
 #include <msii/mesh/mesh_stats.h>
 #include <msii/mesh/prepare_mesh.h>
+#include <msii/mesh/principal_axes.h>
 #include <msii/mesh/trimesh.h>
 #include <msii/mesh/vertex_normals.h>
 // The level set and the invariants (fast and exact), in tiles.
@@ -58,5 +59,9 @@
 #include <msii/render/picture.h>
 #include <msii/render/shading.h>
 #include <msii/render/typeface.h>
+// Figures: the six views of an object on one sheet.
+#include <msii/figures/fat_cross.h>
+#include <msii/figures/sheet_orientation.h>
+#include <msii/figures/sheet_raster.h>
 #include <msii/segmentation/components.h>
 #include <msii/outline/isolines.h>

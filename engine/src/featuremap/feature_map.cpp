@@ -101,13 +101,15 @@ void validateMapInputs(const TriMesh& mesh, const std::vector<VertexProperty>& p
     if (options.zipLevel < 1 || options.zipLevel > 9) throw InvalidInputError("the zip level must be 1 to 9");
 }
 
-/// Per-vertex values, vertex-major (normal x/y/z in the map frame, then the properties), so
-/// that a pixel reads three contiguous rows.
-std::vector<float> vertexTable(const TriMesh& mesh, const MapFrame& frame, const std::vector<VertexProperty>& properties)
+/// Per-vertex values, vertex-major (normal x/y/z in the map frame, or in the mesh's frame
+/// without one, then the properties), so that a pixel reads three contiguous rows.
+std::vector<float> vertexTable(const TriMesh& mesh, const MapFrame* frame, const std::vector<VertexProperty>& properties)
 {
     const std::size_t nv = mesh.numVertices(), numValues = 3 + properties.size();
     std::vector<float> table(nv * numValues);
-    const std::array<std::vector<float>, 3> n = vertexNormalsInFrame(mesh, frame);
+    MapFrame world;
+    world.axisU = {1, 0, 0}, world.axisV = {0, 1, 0}, world.normal = {0, 0, 1};
+    const std::array<std::vector<float>, 3> n = vertexNormalsInFrame(mesh, frame ? *frame : world);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             float* row = table.data() + i * numValues;
@@ -118,15 +120,28 @@ std::vector<float> vertexTable(const TriMesh& mesh, const MapFrame& frame, const
     return table;
 }
 
+/// A header of @p width × @p height pixels with the channels @p names and what every map
+/// states: units, source, parameters and radii.
+Imf::Header baseHeader(int width, int height, const FeatureMapOptions& options, const std::vector<std::string>& names)
+{
+    const Imf::PixelType type = options.half ? Imf::HALF : Imf::FLOAT;
+    Imf::Header header(width, height);
+    header.compression() = toImf(options.compression);
+    header.zipCompressionLevel() = options.zipLevel;
+    for (const std::string& name : names) header.channels().insert(name, Imf::Channel(type));
+    header.insert("msii:units", Imf::StringAttribute(options.units));
+    header.insert("msii:source", Imf::StringAttribute(options.source));
+    header.insert("msii:parameters", Imf::StringAttribute(options.parameters));
+    std::vector<float> radii(options.radii.begin(), options.radii.end());
+    header.insert("msii:radii", Imf::FloatVectorAttribute(radii));
+    return header;
+}
+
 /// The header of the map: its channels (@p names), the frame that places a pixel in space,
 /// and where the values came from.
 Imf::Header mapHeader(const MapFrame& frame, const FeatureMapOptions& options, const std::vector<std::string>& names)
 {
-    const Imf::PixelType type = options.half ? Imf::HALF : Imf::FLOAT;
-    Imf::Header header(frame.width, frame.height);
-    header.compression() = toImf(options.compression);
-    header.zipCompressionLevel() = options.zipLevel;
-    for (const std::string& name : names) header.channels().insert(name, Imf::Channel(type));
+    Imf::Header header = baseHeader(frame.width, frame.height, options, names);
     header.insert("msii:pixelSize", Imf::DoubleAttribute(frame.pixelSize));
     header.insert("msii:origin", Imf::V3dAttribute(v3(frame.origin)));
     header.insert("msii:axisU", Imf::V3dAttribute(v3(frame.axisU)));
@@ -134,12 +149,7 @@ Imf::Header mapHeader(const MapFrame& frame, const FeatureMapOptions& options, c
     header.insert("msii:normal", Imf::V3dAttribute(v3(frame.normal)));
     header.insert("msii:minU", Imf::DoubleAttribute(frame.minU));
     header.insert("msii:maxV", Imf::DoubleAttribute(frame.maxV));
-    header.insert("msii:units", Imf::StringAttribute(options.units));
     header.insert("msii:view", Imf::StringAttribute(mapViewName(frame)));
-    header.insert("msii:source", Imf::StringAttribute(options.source));
-    header.insert("msii:parameters", Imf::StringAttribute(options.parameters));
-    std::vector<float> radii(options.radii.begin(), options.radii.end());
-    header.insert("msii:radii", Imf::FloatVectorAttribute(radii));
     Imf::addComments(header, "msii feature map: pixel (x, y) centre at u = minU + (x + 0.5) pixelSize, "
                              "v = maxV - (y + 0.5) pixelSize; point = origin + u axisU + v axisV + "
                              "height normal; NaN = background (see mask)");
@@ -150,12 +160,15 @@ Imf::Header mapHeader(const MapFrame& frame, const FeatureMapOptions& options, c
 /// normal.x/y/z, mask, then the properties, filled from the pixel hits and the vertex table.
 class MapBand {
 public:
-    /// @p width: of the map; @p numValues: per vertex in @p table.
+    /// @p width: of the map; @p numValues: per vertex in @p table. With @p views (a sheet of
+    /// several views), the table's normals are in the mesh's frame and each pixel turns its
+    /// normal into its view's frame: @p rotations[view] holds that frame's axes u, v, n.
     MapBand(const TriMesh& mesh, const PixelHits& hits, const std::vector<float>& table, std::size_t numValues,
-            int width, std::size_t numChannels, bool half)
+            int width, std::size_t numChannels, bool half, const std::vector<std::int8_t>* views = nullptr,
+            const std::vector<std::array<float, 9>>* rotations = nullptr)
         : mMesh(mesh), mHits(hits), mTable(table), mNumValues(numValues), mNumChannels(numChannels),
-          mWidth(width), mChunkPixels(std::size_t(width) * kRowsPerChunk), mHalf(half),
-          mBand(numChannels * mChunkPixels)
+          mWidth(width), mChunkPixels(std::size_t(width) * kRowsPerChunk), mHalf(half), mViews(views),
+          mRotations(rotations), mBand(numChannels * mChunkPixels)
     {
         if (half) mBandHalf.resize(numChannels * mChunkPixels);
     }
@@ -192,6 +205,11 @@ public:
                     const float* r2 = mTable.data() + std::size_t(tri[2]) * numValues;
                     float* v = value.data() + std::size_t(x) * numValues;
                     for (std::size_t q = 0; q < numValues; ++q) v[q] = w0 * r0[q] + w1 * r1[q] + w2 * r2[q];
+                    if (mViews) {
+                        const std::array<float, 9>& R = (*mRotations)[std::size_t((*mViews)[k])];
+                        const float x = v[0], y = v[1], z = v[2];
+                        for (int c = 0; c < 3; ++c) v[c] = R[3 * c] * x + R[3 * c + 1] * y + R[3 * c + 2] * z;
+                    }
                     const float len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
                     for (int c = 0; c < 3; ++c) v[c] = len > 0 ? v[c] / len : nan;
                 }
@@ -238,6 +256,8 @@ private:
     const int mWidth;
     const std::size_t mChunkPixels;
     const bool mHalf;
+    const std::vector<std::int8_t>* mViews;
+    const std::vector<std::array<float, 9>>* mRotations;
     std::vector<float> mBand;
     std::vector<std::uint16_t> mBandHalf;  // half bits when mHalf
 };
@@ -254,29 +274,24 @@ ExrCompression parseExrCompression(const std::string& name)
     throw InvalidInputError("unknown EXR compression '" + name + "' (use zip, zips, piz, rle or none; all lossless)");
 }
 
-FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, const MapFrame& frame,
-                               const std::vector<VertexProperty>& properties,
-                               const FeatureMapOptions& options, RunContext* progress)
+namespace {
+
+/// The channels' names in the band buffer's order: height, normal.x/y/z, mask, then the
+/// properties.
+std::vector<std::string> channelNames(const std::vector<VertexProperty>& properties)
 {
-    validateMapInputs(mesh, properties, options);
-
-    FeatureMapInfo info;
-    Stopwatch stage;
-    const PixelHits hits = rasterize(mesh, frame, progress);
-    info.coveredPixels = hits.covered;
-    const std::size_t numValues = 3 + properties.size();
-    const std::vector<float> table = vertexTable(mesh, frame, properties);
-    info.rasterSeconds = stage.seconds();
-    stage.restart();
-
-    const int width = frame.width, height = frame.height;
-    // Channel order in the band buffer: height, normal.x/y/z, mask, then the properties.
     std::vector<std::string> names{"height", "normal.x", "normal.y", "normal.z", "mask"};
     for (const VertexProperty& p : properties) names.push_back(p.name);
-    const Imf::Header header = mapHeader(frame, options, names);
-    const std::size_t nc = names.size();
-    MapBand band(mesh, hits, table, numValues, width, nc, options.half);
+    return names;
+}
 
+/// Writes the map's pixels band by band to @p path, atomically; returns the seconds taken.
+double writeBands(const std::string& path, const Imf::Header& header, const std::vector<std::string>& names,
+                  MapBand& band, int height, const FeatureMapOptions& options, RunContext* progress)
+{
+    Stopwatch stage;
+    const int width = header.dataWindow().max.x - header.dataWindow().min.x + 1;
+    const std::size_t nc = names.size();
     // OpenEXR writes through AtomicFile (a temporary file renamed on commit), which writes
     // past the page cache where it can (AtomicFile::Mode::Large).
     const std::size_t rawBytes = std::size_t(width) * std::size_t(height) * nc * (options.half ? 2 : 4);
@@ -303,8 +318,73 @@ FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, con
     }
     if (!stream.error().empty()) throw IOError(stream.error());
     temp.commit();
-    info.writeSeconds = stage.seconds();
-    for (auto it = header.channels().begin(); it != header.channels().end(); ++it) info.channels.push_back(it.name());
+    return stage.seconds();
+}
+
+std::vector<std::string> writtenChannels(const Imf::Header& header)
+{
+    std::vector<std::string> names;
+    for (auto it = header.channels().begin(); it != header.channels().end(); ++it) names.push_back(it.name());
+    return names;
+}
+
+} // namespace
+
+FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, const MapFrame& frame,
+                               const std::vector<VertexProperty>& properties,
+                               const FeatureMapOptions& options, RunContext* progress)
+{
+    validateMapInputs(mesh, properties, options);
+
+    FeatureMapInfo info;
+    Stopwatch stage;
+    const PixelHits hits = rasterize(mesh, frame, progress);
+    info.coveredPixels = hits.covered;
+    const std::size_t numValues = 3 + properties.size();
+    const std::vector<float> table = vertexTable(mesh, &frame, properties);
+    info.rasterSeconds = stage.seconds();
+
+    const std::vector<std::string> names = channelNames(properties);
+    const Imf::Header header = mapHeader(frame, options, names);
+    MapBand band(mesh, hits, table, numValues, frame.width, names.size(), options.half);
+    info.writeSeconds = writeBands(path, header, names, band, frame.height, options, progress);
+    info.channels = writtenChannels(header);
+    return info;
+}
+
+FeatureMapInfo writeFeatureSheet(const std::string& path, const TriMesh& mesh, const FeatureSheet& sheet,
+                                 const std::vector<VertexProperty>& properties, const FeatureMapOptions& options,
+                                 RunContext* progress)
+{
+    validateMapInputs(mesh, properties, options);
+    if (!sheet.hits || !sheet.view || sheet.view->size() != sheet.hits->triangle.size())
+        throw InvalidInputError("the sheet's pixels and their views do not match");
+    FeatureMapInfo info;
+    Stopwatch stage;
+    const PixelHits& hits = *sheet.hits;
+    info.coveredPixels = hits.covered;
+    const std::vector<float> table = vertexTable(mesh, nullptr, properties);
+    std::vector<std::array<float, 9>> rotations;
+    for (const MapFrame& f : sheet.frames)
+        rotations.push_back({float(f.axisU.x), float(f.axisU.y), float(f.axisU.z), float(f.axisV.x),
+                             float(f.axisV.y), float(f.axisV.z), float(f.normal.x), float(f.normal.y),
+                             float(f.normal.z)});
+    for (std::size_t k = 0; k < hits.triangle.size(); ++k)
+        if (hits.triangle[k] != PixelHits::kNone && !(std::size_t((*sheet.view)[k]) < rotations.size()))
+            throw InvalidInputError("a pixel of the sheet sees the mesh outside every view");
+    info.rasterSeconds = stage.seconds();
+
+    const std::vector<std::string> names = channelNames(properties);
+    Imf::Header header = baseHeader(hits.width, hits.height, options, names);
+    header.insert("msii:pixelSize", Imf::DoubleAttribute(sheet.pixelSize));
+    for (const auto& [name, value] : sheet.attributes) header.insert(name, Imf::StringAttribute(value));
+    Imf::addComments(header, "msii feature sheet: several orthographic views on one image; msii:views gives each "
+                             "view's box and its matrix from the mesh's coordinates to [column, row, depth]; "
+                             "NaN = background (see mask)");
+    MapBand band(mesh, hits, table, 3 + properties.size(), hits.width, names.size(), options.half, sheet.view,
+                 &rotations);
+    info.writeSeconds = writeBands(path, header, names, band, hits.height, options, progress);
+    info.channels = writtenChannels(header);
     return info;
 }
 
@@ -340,6 +420,8 @@ FeatureMapImage readFeatureMap(const std::string& path, const std::vector<std::s
         const auto* w = header.findTypedAttribute<Imf::V3dAttribute>("msii:normal");
         const auto* minU = header.findTypedAttribute<Imf::DoubleAttribute>("msii:minU");
         const auto* maxV = header.findTypedAttribute<Imf::DoubleAttribute>("msii:maxV");
+        if (ps) image.frame.pixelSize = ps->value();
+        if (const auto* a = header.findTypedAttribute<Imf::StringAttribute>("msii:views")) image.views = a->value();
         if (ps && o && u && v && w && minU && maxV) {
             image.hasFrame = true;
             image.frame.pixelSize = ps->value();

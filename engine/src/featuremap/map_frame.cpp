@@ -1,6 +1,7 @@
 #include <msii/featuremap/map_frame.h>
 
 #include <msii/core/errors.h>
+#include <msii/mesh/principal_axes.h>
 
 #include <algorithm>
 #include <array>
@@ -10,57 +11,6 @@
 
 namespace msii {
 namespace {
-
-using Mat3 = std::array<std::array<double, 3>, 3>;
-
-/// Eigen-decomposition of a symmetric 3×3 matrix by cyclic Jacobi rotations: eigenvalues
-/// ascending, eigenvectors as columns of the returned matrix.
-void symmetricEigen(Mat3 a, std::array<double, 3>& values, std::array<Vec3, 3>& vectors)
-{
-    Mat3 v{};
-    for (int i = 0; i < 3; ++i) v[i][i] = 1;
-    for (int sweep = 0; sweep < 50; ++sweep) {
-        const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
-        const double diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
-        if (off <= 1e-30 * diag || off == 0) break;
-        for (int p = 0; p < 2; ++p)
-            for (int q = p + 1; q < 3; ++q) {
-                if (a[p][q] == 0) continue;
-                const double theta = (a[q][q] - a[p][p]) / (2 * a[p][q]);
-                const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1));
-                const double c = 1 / std::sqrt(t * t + 1), s = t * c;
-                for (int k = 0; k < 3; ++k) {  // a ← Jᵀ a J
-                    const double akp = a[k][p], akq = a[k][q];
-                    a[k][p] = c * akp - s * akq;
-                    a[k][q] = s * akp + c * akq;
-                }
-                for (int k = 0; k < 3; ++k) {
-                    const double apk = a[p][k], aqk = a[q][k];
-                    a[p][k] = c * apk - s * aqk;
-                    a[q][k] = s * apk + c * aqk;
-                }
-                for (int k = 0; k < 3; ++k) {
-                    const double vkp = v[k][p], vkq = v[k][q];
-                    v[k][p] = c * vkp - s * vkq;
-                    v[k][q] = s * vkp + c * vkq;
-                }
-            }
-    }
-    std::array<int, 3> order{0, 1, 2};
-    std::sort(order.begin(), order.end(), [&](int i, int j) { return a[i][i] < a[j][j]; });
-    for (int k = 0; k < 3; ++k) {
-        values[k] = a[order[k]][order[k]];
-        vectors[k] = Vec3(v[0][order[k]], v[1][order[k]], v[2][order[k]]);
-    }
-}
-
-/// The sign that makes the largest component of @p a positive (a deterministic choice).
-Vec3 canonicalSign(const Vec3& a)
-{
-    const double ax = std::abs(a.x), ay = std::abs(a.y), az = std::abs(a.z);
-    const double big = ax >= ay && ax >= az ? a.x : (ay >= az ? a.y : a.z);
-    return big < 0 ? -a : a;
-}
 
 void axesOfView(MapView view, const Vec3& direction, Vec3& u, Vec3& v, Vec3& w)
 {
@@ -147,35 +97,20 @@ MapFrame makeMapFrame(const TriMesh& mesh, const MapFrameOptions& options)
     if (options.view == MapView::Direction && (!isFinite(options.direction) || !(norm(options.direction) > 0)))
         throw InvalidInputError("the view direction has zero length or is not finite");
 
-    // Area, centroid and second moment of the surface: ∫ x xᵀ dA = A/12 (Σ vᵢvᵢᵀ + s sᵀ) per
-    // triangle (s = Σ vᵢ); the vector area for the side the surface faces.
-    double area = 0;
-    Vec3 first, vectorArea;
-    Mat3 second{};
-    for (const Triangle& t : mesh.triangles) {
-        const Vec3 &a = mesh.points[t[0]], &b = mesh.points[t[1]], &c = mesh.points[t[2]];
-        const Vec3 va = cross(b - a, c - a) * 0.5;
-        const double A = norm(va);
-        area += A;
-        vectorArea += va;
-        const Vec3 s = a + b + c;
-        first += s * (A / 3.0);
-        for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j)
-                second[i][j] += A / 12.0 * (a[i] * a[j] + b[i] * b[j] + c[i] * c[j] + s[i] * s[j]);
-    }
-    if (!(area > 0) || !std::isfinite(area)) throw InvalidInputError("the mesh has no area: nothing to project");
+    // Area, centroid and covariance of the surface; the vector area for the side the
+    // surface faces.
+    const SurfaceMoments moments = surfaceMoments(mesh);
+    const double area = moments.area;
+    if (!(area > 0)) throw InvalidInputError("the mesh has no area: nothing to project");
 
     MapFrame frame;
     frame.view = options.view;
-    frame.origin = first / area;
+    frame.origin = moments.centroid;
     if (options.view == MapView::BestFit) {
-        Mat3 cov;
-        for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j) cov[i][j] = second[i][j] / area - frame.origin[i] * frame.origin[j];
-        std::array<double, 3> values;
-        std::array<Vec3, 3> vectors;
-        symmetricEigen(cov, values, vectors);
+        const PrincipalAxes principal = principalAxes(moments.covariance);
+        const std::array<double, 3>& values = principal.variances;
+        const std::array<Vec3, 3>& vectors = principal.axes;
+        const Vec3& vectorArea = moments.vectorArea;
         Vec3 w = normalized(vectors[0]);
         // Face the side the surface faces: its vector area, when that is most of the
         // projected area (open scans); closed meshes (vector area about 0, also with a small

@@ -151,6 +151,8 @@ std::vector<double> niceTicks(double lo, double hi, int count)
     return ticks;
 }
 
+double scaleBarLength(int pictureWidth, double pixelSize) { return niceLength(pictureWidth * pixelSize / 5); }
+
 std::string formatTick(double value, double step)
 {
     if (!std::isfinite(value)) return value != value ? "nan" : (value > 0 ? "inf" : "-inf");
@@ -225,7 +227,7 @@ RgbImage composeFigure(const RgbImage& picture, const FigureOptions& options)
     const int scaleThick = 2 * s;
     int bottom = contentH;
     if (withScale) {
-        scaleLength = niceLength(w * options.pixelSize / 5);
+        scaleLength = scaleBarLength(w, options.pixelSize);
         scalePixels = std::max(1, int(std::lround(scaleLength / options.pixelSize)));
         scaleLabel = formatTick(scaleLength, scaleLength);
         if (!options.units.empty()) scaleLabel += " " + options.units;

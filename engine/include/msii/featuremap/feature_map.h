@@ -21,7 +21,9 @@
 #include <msii/featuremap/rasterize.h>
 #include <msii/mesh/trimesh.h>
 
+#include <cstdint>
 #include <map>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -59,13 +61,35 @@ FeatureMapInfo writeFeatureMap(const std::string& path, const TriMesh& mesh, con
                                const std::vector<VertexProperty>& properties,
                                const FeatureMapOptions& options, RunContext* context = nullptr);
 
+/// Several views on one image (a figure sheet, figures/fat_cross.h): its pixel hits, each
+/// pixel's view, and the views' frames (each pixel's normal is given in its view's frame).
+struct FeatureSheet {
+    const PixelHits* hits = nullptr;                 ///< the sheet's pixels
+    const std::vector<std::int8_t>* view = nullptr;  ///< per pixel, its index into frames (−1: none)
+    std::vector<MapFrame> frames;
+    double pixelSize = 0;                            ///< mesh units per pixel
+    /// More string attributes for the header, e.g. msii:layout and msii:views (the views'
+    /// boxes and matrices as JSON).
+    std::vector<std::pair<std::string, std::string>> attributes;
+};
+
+/// Writes a sheet's map to @p path as writeFeatureMap writes a map: the same channels, with
+/// height along each pixel's view (towards its viewer) and normals in its view's frame; the
+/// header has msii:pixelSize and the sheet's attributes instead of one frame.
+/// @throw InvalidInputError as writeFeatureMap, or if the pixels and views do not match;
+/// IOError if the file cannot be written.
+FeatureMapInfo writeFeatureSheet(const std::string& path, const TriMesh& mesh, const FeatureSheet& sheet,
+                                 const std::vector<VertexProperty>& properties, const FeatureMapOptions& options,
+                                 RunContext* context = nullptr);
+
 /// A feature map read back: every channel as float, and the frame from the header.
 struct FeatureMapImage {
     int width = 0, height = 0;
     std::map<std::string, std::vector<float>> channels;  ///< row-major, row 0 at the top
     std::vector<std::string> channelNames;               ///< every channel of the file, read or not
-    MapFrame frame;           ///< view, pixel size, axes and corner from the header
-    bool hasFrame = false;    ///< the msii attributes were present
+    MapFrame frame;           ///< view, pixel size, axes and corner from the header (a sheet's: its pixel size alone)
+    bool hasFrame = false;    ///< the msii attributes of one frame were present
+    std::string views;        ///< a sheet's msii:views (JSON), else empty
     std::string units, source, parameters;
     std::vector<double> radii;
 };

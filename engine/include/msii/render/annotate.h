@@ -39,6 +39,10 @@ struct FigureOptions {
 /// finite range lo < hi, or a non-finite pixelSize.
 RgbImage composeFigure(const RgbImage& picture, const FigureOptions& options);
 
+/// The scale bar's length for a picture @p pictureWidth pixels wide at @p pixelSize mesh
+/// units per pixel: the nice value (1, 2 or 5 × 10^k) closest to a fifth of the width.
+double scaleBarLength(int pictureWidth, double pixelSize);
+
 /// Nice tick values (1, 2, 2.5 or 5 × 10^k steps) covering [lo, hi], about @p count of them.
 /// @throw InvalidInputError if lo or hi is not finite or count < 1.
 std::vector<double> niceTicks(double lo, double hi, int count = 5);

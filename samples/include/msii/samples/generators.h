@@ -39,8 +39,10 @@
 #include <msii/mesh/trimesh.h>
 #include <msii/terrain/dem.h>
 
+#include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace msii::samples {
 
@@ -71,6 +73,44 @@ struct CubeOptions {
 /// @throw InvalidInputError if side or spacing is not a positive finite number or the mesh
 ///        would exceed 200 million vertices.
 TriMesh makeCube(const CubeOptions& options);
+
+/// A whole clay tablet, closed: a box of width (x) × height (y) × thickness (z) with its
+/// edges and corners rounded, centred on the origin; its obverse (+z) rises by obverseBulge
+/// at the centre and its reverse (−z) bulges by reverseBulge (the flatter obverse, the more
+/// convex reverse of a real tablet); round impressions (marks) are pressed into the flat part
+/// of each of its six sides, a different number on each by default, so that a test can tell
+/// the sides apart. Seen from the obverse with +y up: top +y, bottom −y, left −x, right +x.
+/// The triangulation is irregular (a jittered box lattice mapped onto the rounded box, as
+/// makeCube's, denser where the rounding compresses it) and faces outward.
+enum class TabletSide { Obverse, Reverse, Top, Bottom, Left, Right };
+/// "obverse", "reverse", "top", "bottom", "left", "right".
+const char* tabletSideName(TabletSide side);
+struct RoundedTabletOptions {
+    double width = 24.0, height = 32.0, thickness = 10.0;  ///< mm, along x, y and z
+    double rounding = 2.5;      ///< radius of the rounded edges and corners, mm
+    double obverseBulge = 0.1;  ///< rise of the obverse's centre, mm
+    double reverseBulge = 1.5;  ///< rise of the reverse's centre, mm
+    /// Marks per side, in TabletSide order (obverse, reverse, top, bottom, left, right).
+    std::array<int, 6> marks{6, 5, 1, 2, 4, 3};
+    double markRadius = 1.0;    ///< mm
+    double markDepth = 0.4;     ///< depth of a mark's centre, mm (profile depth (1 − d²/r²)²)
+    double spacing = 0.25;      ///< mean vertex spacing of the box lattice, mm
+    double roughness = 0.0;     ///< white scanner noise: each vertex moved along the normal by up to this, mm
+    std::uint64_t seed = 1;
+};
+struct TabletMark {
+    TabletSide side;
+    Vec3 centre;  ///< on the surface before the mark was pressed in (its projection marks the mark's centre in any view of its side)
+    Vec3 normal;  ///< the side's outward axis
+    double radius = 0, depth = 0;
+};
+struct RoundedTablet {
+    TriMesh mesh;
+    std::vector<TabletMark> marks;  ///< side by side in TabletSide order
+};
+/// @throw InvalidInputError for sizes that are not positive, a rounding of half the smallest
+///        side or more, marks deeper than the rounding or that do not fit on their side.
+RoundedTablet makeRoundedTablet(const RoundedTabletOptions& options);
 
 /// A height field z = h(x, y) over [0, width] x [0, height], as an open patch (normals up,
 /// so the solid is below) or as a closed slab (the same top surface, a flat bottom at
