@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The Snakemake workflow of samples/snakemake on a folder of generated scans:
 # runs locally with --cores 2; every scan gives the same PLY as `msii compute` run directly
-# (byte for byte), a picture and a summary line; a DEM gives the GeoTIFF msii compute gives; border=mask
+# (byte for byte), a picture, a sheet of six views and a summary line; a DEM gives the GeoTIFF msii compute gives; border=mask
 # is passed on; a rerun does nothing; a broken scan fails
 # its job while the others finish (--keep-going); the workflow is ready for Slurm (dry run).
 # Usage: test_snakemake.sh MSII MSII_SAMPLES SNAKEFILE
@@ -18,7 +18,7 @@ mkdir scans
 "$samples" sphere --radius 2 --spacing 0.15 -o scans/c.ply -q
 "$samples" terrain --geotiff --width 12 --height 10 --spacing 0.25 --relief 1 --holes 2 -o scans/e.tif -q
 run() { snakemake --snakefile "$snakefile" --cores 2 --config scans=scans results=results radius=0.6 scales=4 \
-          msii="$msii" "$@"; }
+          sheets=1 dpi=150 msii="$msii" "$@"; }
 
 run -q > log1.txt 2>&1 || { cat log1.txt; fail "the workflow failed"; }
 for name in a b c; do
@@ -34,6 +34,12 @@ done
 gdal_translate -q -of ENVI results/e.msii.tif workflow-e.raw && gdal_translate -q -of ENVI direct-e.tif direct-e.raw
 [ -s direct-e.raw ] && cmp -s workflow-e.raw direct-e.raw || fail "e: the workflow's GeoTIFF differs from msii compute's"
 [ "$(wc -l < results/msii-summary.jsonl)" -eq 4 ] || fail "the summary should have 4 lines"
+# The sheets: one per scan at the dpi asked, and their contact sheet naming each.
+for name in a b c; do
+  [ -s results/sheets/$name.msii.quality.sheet.png ] || fail "missing the sheet of $name"
+  grep -q '"dpi": 150' results/sheets/$name.msii.quality.sheet.json || fail "$name's sheet is not at 150 dpi"
+  grep -q "$name.msii.ply" results/sheets/index.html || fail "the contact sheet does not name $name"
+done
 grep -q '"vertices"' results/msii-summary.jsonl || fail "the summary has no vertex counts"
 
 run > log2.txt 2>&1 || { cat log2.txt; fail "the rerun failed"; }

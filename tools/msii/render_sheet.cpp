@@ -279,6 +279,14 @@ std::string escapeHtml(const std::string& text)
     return out;
 }
 
+/// A length as a reader wants it: three significant digits, whole units from 100 on.
+std::string length(double value)
+{
+    char text[32];
+    std::snprintf(text, sizeof text, value >= 100 ? "%.0f" : "%.3g", value);
+    return text;
+}
+
 /// A thumbnail of @p image @p factor times its size (box-filtered).
 RgbImage thumbnail(const RgbImage& image, double factor)
 {
@@ -334,8 +342,9 @@ void writeContactSheet(const fs::path& folder, const std::vector<SheetEntry>& en
         html << "<figure><a href=\"" << escapeHtml(fs::relative(png, folder).string()) << "\"><img src=\""
              << escapeHtml(thumb) << "\" width=\"" << small.width << "\" height=\"" << small.height << "\" alt=\""
              << escapeHtml(fs::path(e.input).filename().string()) << "\"></a><figcaption><strong>"
-             << escapeHtml(fs::path(e.input).filename().string()) << "</strong><br>" << e.size.x << " &times; "
-             << e.size.y << " &times; " << e.size.z << " " << escapeHtml(units) << "</figcaption></figure>\n";
+             << escapeHtml(fs::path(e.input).filename().string()) << "</strong><br>" << length(e.size.x) << " &times; "
+             << length(e.size.y) << " &times; " << length(e.size.z) << " " << escapeHtml(units)
+             << "</figcaption></figure>\n";
     }
     html << "</main>\n</body>\n</html>\n";
     writeTextFileAtomic((folder / "index.html").string(), html.str());

@@ -127,6 +127,7 @@ nlohmann::json sheetRecord(const FatCrossLayout& layout, const std::string& unit
     r["right"] = vectorJson(o.right());
     r["orientation_rule"] = {{"front", o.frontRule}, {"up", o.upRule}};
     r["size"] = vectorJson(layout.size);
+    r["sheet"] = {layout.width, layout.height};
     r["views"] = sheetViewsRecord(layout);
     return r;
 }
