@@ -28,12 +28,12 @@ RoundedTablet tablet()
     return makeRoundedTablet(o);
 }
 
-SheetOrientation straight()
+SheetOrientation straight(const TriMesh& mesh)
 {
     SheetOrientationOptions given;
     given.front = Vec3(0, 0, 1);
     given.up = Vec3(0, 1, 0);
-    return orientSheet(TriMesh{}, given);
+    return orientSheet(mesh, given);
 }
 
 const SheetViewBox& box(const FatCrossLayout& l, SheetView v)
@@ -67,7 +67,7 @@ TEST(FatCross, ViewsHaveTheObjectsExtentsAndSitWhereTheyBelong)
     const RoundedTablet t = tablet();
     FatCrossOptions o;
     o.dpi = 300;
-    const FatCrossLayout l = layoutFatCross(t.mesh, straight(), o);
+    const FatCrossLayout l = layoutFatCross(t.mesh, straight(t.mesh), o);
     EXPECT_DOUBLE_EQ(l.pixelSize, 25.4 / 300);
     // The extents along right (x), up (y) and front (z): 24 × 32 × (10 + the
     // bulges).
@@ -116,7 +116,7 @@ TEST(FatCross, EachViewIsFoldedOutFromTheObverse)
     const RoundedTablet t = tablet();
     FatCrossOptions o;
     o.pixelSize = 0.1;
-    const FatCrossLayout l = layoutFatCross(t.mesh, straight(), o);
+    const FatCrossLayout l = layoutFatCross(t.mesh, straight(t.mesh), o);
     const Vec3 c(0, 0, 0), dx(1, 0, 0), dy(0, 1, 0), dz(0, 0, 1);
     const auto moves = [&](SheetView v, const Vec3& d) { return project(box(l, v), c + d) - project(box(l, v), c); };
     EXPECT_GT(moves(SheetView::Obverse, dx).x, 0);
@@ -145,7 +145,7 @@ TEST(FatCross, TheObjectFillsEachBoxToItsEdges)
     const RoundedTablet t = tablet();
     FatCrossOptions o;
     o.dpi = 200;
-    const FatCrossLayout l = layoutFatCross(t.mesh, straight(), o);
+    const FatCrossLayout l = layoutFatCross(t.mesh, straight(t.mesh), o);
     for (const SheetViewBox& b : l.views) {
         SCOPED_TRACE(sheetViewName(b.view));
         double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
@@ -169,21 +169,21 @@ TEST(FatCross, TheScaleIsGivenOnce)
     for (const int n : {300, 1000, 2048}) {
         FatCrossOptions o;
         o.longerSidePixels = n;
-        const FatCrossLayout l = layoutFatCross(t.mesh, straight(), o);
+        const FatCrossLayout l = layoutFatCross(t.mesh, straight(t.mesh), o);
         EXPECT_LE(std::max(l.width, l.height), n);
         EXPECT_GE(std::max(l.width, l.height), n - 3 - n / 200);
     }
     FatCrossOptions none;
-    EXPECT_THROW(layoutFatCross(t.mesh, straight(), none), InvalidInputError);
+    EXPECT_THROW(layoutFatCross(t.mesh, straight(t.mesh), none), InvalidInputError);
     FatCrossOptions two;
     two.dpi = 300, two.pixelSize = 0.1;
-    EXPECT_THROW(layoutFatCross(t.mesh, straight(), two), InvalidInputError);
+    EXPECT_THROW(layoutFatCross(t.mesh, straight(t.mesh), two), InvalidInputError);
     FatCrossOptions negative;
     negative.pixelSize = -0.1;
-    EXPECT_THROW(layoutFatCross(t.mesh, straight(), negative), InvalidInputError);
+    EXPECT_THROW(layoutFatCross(t.mesh, straight(t.mesh), negative), InvalidInputError);
     FatCrossOptions huge;
     huge.pixelSize = 1e-4;
-    EXPECT_THROW(layoutFatCross(t.mesh, straight(), huge), InvalidInputError);
+    EXPECT_THROW(layoutFatCross(t.mesh, straight(t.mesh), huge), InvalidInputError);
 }
 
 TEST(FatCross, CaptionsHaveRoomUnderTheirViews)
@@ -191,10 +191,10 @@ TEST(FatCross, CaptionsHaveRoomUnderTheirViews)
     const RoundedTablet t = tablet();
     FatCrossOptions o;
     o.pixelSize = 0.2;
-    const FatCrossLayout plain = layoutFatCross(t.mesh, straight(), o);
+    const FatCrossLayout plain = layoutFatCross(t.mesh, straight(t.mesh), o);
     o.captionHeight = 18;
     o.captionWidth = {40, 40, 40, 40, 300, 40};  // a long caption for the left edge
-    const FatCrossLayout l = layoutFatCross(t.mesh, straight(), o);
+    const FatCrossLayout l = layoutFatCross(t.mesh, straight(t.mesh), o);
     const SheetViewBox &left = box(l, SheetView::Left), &obv = box(l, SheetView::Obverse),
                        &top = box(l, SheetView::Top);
     EXPECT_GE(left.captionX - 150, 0);  // the caption fits in its column

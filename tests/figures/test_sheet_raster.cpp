@@ -101,7 +101,6 @@ TEST(SheetRaster, AClosedTabletShowsAllSidesAndAOneSidedScanOne)
     o.spacing = 0.4;
     const Sheet closed = sheetOf(makeRoundedTablet(o).mesh, {}, 0.2);
     for (bool scanned : closed.sides.scanned) EXPECT_TRUE(scanned);
-    for (double share : closed.sides.facingShare) EXPECT_GT(share, 0.9);
 
     HeightFieldOptions h;  // a tablet's obverse scanned alone, facing +z, with its wedges
     h.width = 16;
@@ -154,4 +153,33 @@ TEST(SheetRaster, ViewsMustFitTheirBoxes)
     s.views[0] = PixelHits{};
     EXPECT_THROW(composeSheet(s.layout, s.views), InvalidInputError);
     EXPECT_THROW(sheetSides(t.mesh, {}, s.layout, s.views), InvalidInputError);
+}
+
+TEST(SheetRaster, FacesTurnedWrongStillShow)
+{
+    // A closed surface draws only the faces turned towards each view, when its faces agree;
+    // flipped faces or a surface turned inside out must not leave holes.
+    RoundedTabletOptions o;
+    o.spacing = 0.5;
+    o.marks = {0, 0, 0, 0, 0, 0};
+    const TriMesh outward = makeRoundedTablet(o).mesh;
+    const Sheet reference = sheetOf(outward, straight(), 0.25);
+    const auto covered = [](const Sheet& s) {
+        std::vector<bool> c(s.pixels.hits.triangle.size());
+        for (std::size_t k = 0; k < c.size(); ++k) c[k] = s.pixels.hits.triangle[k] != PixelHits::kNone;
+        return c;
+    };
+    TriMesh inward = outward;
+    for (Triangle& t : inward.triangles) std::swap(t[1], t[2]);
+    EXPECT_EQ(covered(sheetOf(inward, straight(), 0.25)), covered(reference));
+    // One face flipped in the middle of the obverse (and a few more elsewhere).
+    TriMesh flipped = outward;
+    const SheetViewBox& obverse = reference.layout.views[std::size_t(SheetView::Obverse)];
+    const std::size_t centre =
+        reference.pixels.hits.index(obverse.x0 + obverse.frame.width / 2, obverse.y0 + obverse.frame.height / 2);
+    const std::uint32_t seen = reference.pixels.hits.triangle[centre];
+    for (std::uint32_t t : {seen, 7u, 1000u, 20000u}) std::swap(flipped.triangles[t][1], flipped.triangles[t][2]);
+    const Sheet s = sheetOf(flipped, straight(), 0.25);
+    EXPECT_EQ(s.pixels.hits.triangle[centre], seen);
+    EXPECT_EQ(covered(s), covered(reference));
 }

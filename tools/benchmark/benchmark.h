@@ -2,7 +2,7 @@
 /// @brief What the cases of `msii-benchmark` share: the settings (the command line), the
 /// work folder, the report that is printed and kept for the performance page, a few helpers,
 /// and each case's entry points. Each case has a file of its own, named after it:
-/// tablet_case.cpp, processes_case.cpp, exact_case.cpp, metrics_case.cpp, maps_case.cpp,
+/// tablet_case.cpp, processes_case.cpp, exact_case.cpp, metrics_case.cpp, maps_case.cpp, sheets_case.cpp,
 /// large_terrain_case.cpp, dem_case.cpp and terrain_peer_case.cpp; benchmark_main.cpp runs
 /// them in order and writes the page.
 #pragma once
@@ -75,6 +75,8 @@ struct Settings {
     int exactVertices = 2000;
     bool exactSlab = true, processes = true;
     bool scans = true;         ///< the scans case: scan-like slabs of ~38k and ~300k vertices, and the tablet
+    bool sheets = true;        ///< the sheets case: the fat cross beside one view, on the tablet and a closed tablet
+    double sheetDpi = 600;     ///< the sheets case's scale
     std::string before;        ///< an earlier msii program, run beside --msii on the scans case
     std::string gigamesh;      ///< a folder holding GigaMesh's gigamesh-featurevectors and -sl
     std::string markdown;
@@ -196,6 +198,27 @@ struct MapRuns {
     MapFrame mapFrame, pictureFrame;
 };
 
+// The six views on one sheet beside one view (sheets_case.cpp).
+
+/// One view's picture and the sheet of the same input at the same pixel size, in turn.
+struct SheetPair {
+    std::vector<double> view, sheet;
+    double viewPeak = 0, sheetPeak = 0;
+    bool ok = true;
+};
+struct SheetRuns {
+    SheetPair tablet, closed;
+    std::size_t closedVertices = 0;
+};
+
+/// `msii render` (one view) and `msii render --layout fat-cross` in processes of their own,
+/// in turn: on the tablet's results (bench.output) and on a closed tablet of about
+/// @p tabletVertices vertices.
+SheetRuns timeSheets(const Bench& bench, std::size_t tabletVertices);
+
+/// The rows of the tablet's table for the sheets' runs.
+void printSheetRows(Report& report, const Settings& s, const SheetRuns& r, std::size_t tabletVertices);
+
 /// The EXR feature map (every feature and quality; default PIZ float, and the variants) and
 /// a PNG picture, run after run.
 MapRuns timeMapsAndPictures(const Bench& bench, const TriMesh& mesh, const std::vector<VertexProperty>& props,
@@ -216,6 +239,7 @@ struct TabletExtras {
     std::size_t numFeatures = 0, numProperties = 0;
     const MapRuns& maps;
     const ProcessRuns& processes;
+    const SheetRuns& sheets;
 };
 
 /// The tablet's table: the line that says what was measured, the machine, and the stages.

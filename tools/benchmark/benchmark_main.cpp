@@ -199,6 +199,11 @@ void addOptions(CLI::App& app, Settings& s)
                    "also time msii compute, in a process of its own and per stage, on scan-like closed slabs of ~38k "
                    "(one thread) and ~300k vertices (two threads) at R = 25 median edges and on the tablet (two "
                    "threads), with all four invariants and with V and S alone (default true)");
+    app.add_option("--sheets", s.sheets,
+                   "also time msii render --layout fat-cross beside one view's msii render at the same pixel size, "
+                   "each in its own process, on the tablet's results and on a closed tablet of as many vertices "
+                   "(default true)");
+    app.add_option("--sheet-dpi", s.sheetDpi, "the sheets' scale, dots per inch (default 600)");
     app.add_option("--before", s.before,
                    "with the scans: an earlier msii build's program (\"PROGRAM [ARGS...]\"), run in turn with --msii "
                    "on the same inputs, for before/after columns and their ratio")
@@ -281,6 +286,8 @@ int main(int argc, char** argv)
     const TabletRuns tablet = timeTablet(bench);
     ProcessRuns processes;
     if (settings.processes) processes = runProcesses(bench, tablet);
+    SheetRuns sheets;
+    if (settings.sheets) sheets = timeSheets(bench, tablet.nv);
     fs::remove_all(dir);
 
     // The exact mode (V, S, P, L from the triangles): on a block of the tablet's vertices,
@@ -299,7 +306,7 @@ int main(int argc, char** argv)
     const MapRuns maps = timeMapsAndPictures(bench, tablet.lastMesh, props, quality);
 
     const TabletExtras extras{generateSeconds, exact, slab.numVertices(), metrics, table.dimension(), props.size(),
-                              maps, processes};
+                              maps, processes, sheets};
     printTabletTable(report, settings, tablet, extras);
     std::fflush(stdout);
     if (!scans.cases.empty()) printScanTables(report, settings, scans);

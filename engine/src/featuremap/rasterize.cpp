@@ -1,23 +1,18 @@
 #include <msii/featuremap/rasterize.h>
 
+#include "raster_bands.h"
+
 #include <msii/mesh/vertex_normals.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 
 namespace msii {
-namespace {
-
-constexpr int kBandRows = 16;
-
-struct Projected {
-    double x, y, h;  // continuous pixel coordinates and height
-};
-
-} // namespace
 
 std::array<std::vector<float>, 3> vertexNormalsInFrame(const TriMesh& mesh, const MapFrame& frame)
 {
@@ -50,63 +45,39 @@ std::vector<float> coverageMask(const PixelHits& hits)
     return mask;
 }
 
-PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, RunContext* progress)
+namespace raster {
+
+PixelHits emptyHits(int width, int height)
 {
     PixelHits hits;
-    hits.width = frame.width;
-    hits.height = frame.height;
-    const std::size_t numPixels = std::size_t(frame.width) * std::size_t(frame.height);
+    hits.width = width;
+    hits.height = height;
+    const std::size_t numPixels = std::size_t(width) * std::size_t(height);
     hits.triangle.assign(numPixels, PixelHits::kNone);
     hits.b1.assign(numPixels, 0.0f);
     hits.b2.assign(numPixels, 0.0f);
     hits.depth.assign(numPixels, std::numeric_limits<float>::quiet_NaN());
+    return hits;
+}
 
-    std::vector<Projected> p(mesh.numVertices());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.size()), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            const Vec3 m = frame.toMap(mesh.points[i]);
-            p[i] = {frame.pixelX(m.x), frame.pixelY(m.y), m.z};
-        }
-    });
-
-    // Rows of pixel centres a triangle can cover, and the bands they fall in (CSR lists).
-    const int numBands = (frame.height + kBandRows - 1) / kBandRows;
-    const std::size_t nt = mesh.numTriangles();
-    const auto rowRange = [&](std::size_t t, int& lo, int& hi) {
-        const Triangle& tri = mesh.triangles[t];
-        const double y0 = std::min({p[tri[0]].y, p[tri[1]].y, p[tri[2]].y});
-        const double y1 = std::max({p[tri[0]].y, p[tri[1]].y, p[tri[2]].y});
-        lo = std::max(0, int(std::ceil(y0 - 0.5)));
-        hi = std::min(frame.height - 1, int(std::floor(y1 - 0.5)));
-    };
-    std::vector<std::size_t> bandStart(std::size_t(numBands) + 1, 0);
-    for (std::size_t t = 0; t < nt; ++t) {
-        int lo, hi;
-        rowRange(t, lo, hi);
-        if (lo > hi) continue;
-        for (int b = lo / kBandRows; b <= hi / kBandRows; ++b) ++bandStart[std::size_t(b) + 1];
-    }
-    for (int b = 0; b < numBands; ++b) bandStart[std::size_t(b) + 1] += bandStart[std::size_t(b)];
-    std::vector<std::uint32_t> bandTriangles(bandStart.back());
-    {
-        std::vector<std::size_t> fill(bandStart.begin(), bandStart.end() - 1);
-        for (std::size_t t = 0; t < nt; ++t) {
-            int lo, hi;
-            rowRange(t, lo, hi);
-            if (lo > hi) continue;
-            for (int b = lo / kBandRows; b <= hi / kBandRows; ++b) bandTriangles[fill[std::size_t(b)]++] = std::uint32_t(t);
-        }
-    }
-
-    if (progress) progress->start("rasterising", std::size_t(numBands));
-    tbb::parallel_for(tbb::blocked_range<int>(0, numBands), [&](const auto& range) {
+void drawBands(const TriMesh& mesh, const std::vector<Projected>& p, const Bands& bands, PixelHits& hits,
+               RunContext* progress)
+{
+    if (progress) progress->start("rasterising", bands.start.size() - 1);
+    tbb::parallel_for(tbb::blocked_range<int>(0, int(bands.start.size()) - 1), [&](const auto& range) {
         for (int band = range.begin(); band < range.end(); ++band) {
-            const int rowLo = band * kBandRows, rowHi = std::min(frame.height, rowLo + kBandRows) - 1;
+            const int rowLo = band * kBandRows, rowHi = std::min(hits.height, rowLo + kBandRows) - 1;
             // Triangles in index order, so that ties in height go to the lower index.
-            for (std::size_t k = bandStart[std::size_t(band)]; k < bandStart[std::size_t(band) + 1]; ++k) {
-                const std::uint32_t t = bandTriangles[k];
+            for (std::size_t k = bands.start[std::size_t(band)]; k < bands.start[std::size_t(band) + 1]; ++k) {
+                const std::uint32_t t = bands.triangles[k];
                 const Triangle& tri = mesh.triangles[t];
                 const Projected &a = p[tri[0]], &b = p[tri[1]], &c = p[tri[2]];
+                // The pixel centres it may cover first: most triangles of a fine mesh cover none.
+                const int y0 = std::max(rowLo, int(std::ceil(std::min({a.y, b.y, c.y}) - 0.5)));
+                const int y1 = std::min(rowHi, int(std::floor(std::max({a.y, b.y, c.y}) - 0.5)));
+                const int x0 = std::max(0, int(std::ceil(std::min({a.x, b.x, c.x}) - 0.5)));
+                const int x1 = std::min(hits.width - 1, int(std::floor(std::max({a.x, b.x, c.x}) - 0.5)));
+                if (y0 > y1 || x0 > x1) continue;
                 const double area = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
                 if (area == 0 || !std::isfinite(area)) continue;
                 const double inv = 1.0 / area;
@@ -127,10 +98,6 @@ PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, RunContext* prog
                 const auto edge = [](const Edge& e, double px, double py) {
                     return e.sign * (e.dx * (py - e.y) - e.dy * (px - e.x));
                 };
-                const int y0 = std::max(rowLo, int(std::ceil(std::min({a.y, b.y, c.y}) - 0.5)));
-                const int y1 = std::min(rowHi, int(std::floor(std::max({a.y, b.y, c.y}) - 0.5)));
-                const int x0 = std::max(0, int(std::ceil(std::min({a.x, b.x, c.x}) - 0.5)));
-                const int x1 = std::min(frame.width - 1, int(std::floor(std::max({a.x, b.x, c.x}) - 0.5)));
                 for (int y = y0; y <= y1; ++y) {
                     const double py = y + 0.5;
                     for (int x = x0; x <= x1; ++x) {
@@ -156,6 +123,31 @@ PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, RunContext* prog
     });
     if (progress) progress->end();
     for (std::uint32_t t : hits.triangle) hits.covered += t != PixelHits::kNone;
+}
+
+} // namespace raster
+
+PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, RunContext* progress, RasterFaces faces)
+{
+    using namespace raster;
+    PixelHits hits = emptyHits(frame.width, frame.height);
+    std::vector<Projected> p(mesh.numVertices());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.size()), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            const Vec3 m = frame.toMap(mesh.points[i]);
+            p[i] = {frame.pixelX(m.x), frame.pixelY(m.y), m.z};
+        }
+    });
+    const std::array<int, 1> numBands{(frame.height + kBandRows - 1) / kBandRows};
+    const std::array<Bands, 1> bands = listBands(mesh.numTriangles(), numBands, [&](std::size_t t) {
+        const Triangle& tri = mesh.triangles[t];
+        const Projected &a = p[tri[0]], &b = p[tri[1]], &c = p[tri[2]];
+        if (!drawn(faces, (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y))) return std::array<BandRange, 1>{kNoBands};
+        return std::array<BandRange, 1>{bandsOfBox(std::min({a.x, b.x, c.x}), std::max({a.x, b.x, c.x}),
+                                                   std::min({a.y, b.y, c.y}), std::max({a.y, b.y, c.y}), frame.width,
+                                                   frame.height)};
+    });
+    drawBands(mesh, p, bands[0], hits, progress);
     return hits;
 }
 

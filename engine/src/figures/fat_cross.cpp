@@ -1,7 +1,6 @@
 #include <msii/figures/fat_cross.h>
 
 #include <msii/core/errors.h>
-#include <msii/mesh/principal_axes.h>
 
 #include <algorithm>
 #include <cmath>
@@ -154,9 +153,7 @@ ToPixel SheetViewBox::toPixel() const
 FatCrossLayout layoutFatCross(const TriMesh& mesh, const SheetOrientation& orientation, const FatCrossOptions& options)
 {
     if (mesh.empty()) throw InvalidInputError("the mesh is empty: nothing to lay out");
-    const SurfaceMoments m = surfaceMoments(mesh, false);
-    if (!(m.area > 0)) throw InvalidInputError("the mesh has no area: nothing to lay out");
-    const Extents e = extentsOf(mesh, orientation, m.centroid);
+    const Extents e = extentsOf(mesh, orientation, orientation.centre);
     FatCrossLayout layout;
     layout.orientation = orientation;
     layout.pixelSize = pixelSizeFor(e, options);

@@ -115,18 +115,19 @@ SheetOrientation orientSheet(const TriMesh& mesh, const SheetOrientationOptions&
     const std::optional<Vec3> front =
         options.front ? std::optional(checkedDirection(*options.front, "front")) : std::nullopt;
     const std::optional<Vec3> up = options.up ? std::optional(checkedDirection(*options.up, "up")) : std::nullopt;
+    const SurfaceMoments m = surfaceMoments(mesh, !(front && up));
+    if (!(m.area > 0)) throw InvalidInputError("the mesh has no area: nothing to lay out");
     SheetOrientation o;
+    o.centre = m.centroid;
+    o.closed = norm(m.vectorArea) <= 0.01 * m.area;
     if (front && up) {
         o.front = *front;
         o.up = across(*up, *front);
         if (!(norm(o.up) > 0))
-            throw InvalidInputError("the front and up directions are parallel: up "
-                                    "needs a part across the front");
+            throw InvalidInputError("the front and up directions are parallel: up needs a part across the front");
         o.frontRule = o.upRule = "given";
         return o;
     }
-    const SurfaceMoments m = surfaceMoments(mesh);
-    if (!(m.area > 0)) throw InvalidInputError("the mesh has no area: nothing to lay out");
     const PrincipalAxes p = principalAxes(m.covariance);
     if (front) {
         o.front = *front;

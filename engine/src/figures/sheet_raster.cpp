@@ -1,7 +1,8 @@
 #include <msii/figures/sheet_raster.h>
 
 #include <msii/core/errors.h>
-#include <msii/mesh/principal_axes.h>
+
+#include "../featuremap/raster_bands.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -24,14 +25,128 @@ Vec3 normalAt(const TriMesh& mesh, const std::vector<Vec3>& normals, const Pixel
 /// Facing the viewer: the normal within 75° of the view's direction.
 constexpr double kFacingCosine = 0.26;
 
+/// splitmix64's finaliser: a vertex's random 64-bit name.
+std::uint64_t hashOf(std::uint64_t z)
+{
+    z += 0x9e3779b97f4a7c15ULL;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+}
+
+/// The triangles a view needs to draw. A closed surface whose faces agree in orientation
+/// hides the faces that turn away from the viewer, in every view: only those facing it
+/// (outward, positive volume) or away (inward) are drawn. Any other surface draws all: an open
+/// scan seen from behind, a scan with flipped faces. Agreement is checked per vertex: over
+/// its triangles, the names of the corners after it less those before it sum to zero when
+/// every edge is met once each way (a border or a flipped face leaves a sum, but for a chance
+/// of 2⁻⁶⁴).
+RasterFaces facesToDraw(const TriMesh& mesh, const SheetOrientation& orientation)
+{
+    if (!orientation.closed) return RasterFaces::Both;
+    std::vector<std::uint64_t> star(mesh.numVertices(), 0);
+    double volume = 0;
+    for (const Triangle& t : mesh.triangles) {
+        const std::uint64_t h0 = hashOf(t[0]), h1 = hashOf(t[1]), h2 = hashOf(t[2]);
+        star[t[0]] += h1 - h2, star[t[1]] += h2 - h0, star[t[2]] += h0 - h1;
+        const Vec3& c = orientation.centre;
+        volume += dot(mesh.points[t[0]] - c, cross(mesh.points[t[1]] - c, mesh.points[t[2]] - c));
+    }
+    for (const std::uint64_t sum : star)
+        if (sum != 0) return RasterFaces::Both;
+    return volume > 0 ? RasterFaces::Towards : RasterFaces::Away;
+}
+
+/// A view's axes as the object's (0 right, 1 up, 2 front) and their signs.
+struct ViewAxes {
+    std::size_t u, v, n;
+    double us, vs, ns;
+};
+
+/// Which of the object's axes @p axis (right, up, front) each of the view's is, and its sign
+/// (the layout builds the views' axes from them, so they match exactly).
+ViewAxes viewAxes(const SheetViewBox& box, const std::array<Vec3, 3>& axis)
+{
+    ViewAxes a{};
+    const auto find = [&](const Vec3& w, std::size_t& index, double& sign) {
+        for (std::size_t k = 0; k < 3; ++k) {
+            if (w == axis[k] || w == -axis[k]) {
+                index = k, sign = w == axis[k] ? 1.0 : -1.0;
+                return;
+            }
+        }
+        throw InvalidInputError("a view's axes are not the object's right, up and front");
+    };
+    find(box.frame.axisU, a.u, a.us);
+    find(box.frame.axisV, a.v, a.vs);
+    find(box.frame.normal, a.n, a.ns);
+    return a;
+}
+
 }  // namespace
 
 ViewHits rasterizeViews(const TriMesh& mesh, const FatCrossLayout& layout, RunContext* progress)
 {
+    using namespace raster;
+    const RasterFaces faces = facesToDraw(mesh, layout.orientation);
+    // Each vertex along right, up and front from the centre: every view's coordinates are
+    // these, signed and shifted, as its frame's toMap gives them (featuremap/map_frame.h).
+    const SheetOrientation& o = layout.orientation;
+    const std::array<Vec3, 3> axis = {o.right(), o.up, o.front};
+    std::vector<std::array<double, 3>> along(mesh.numVertices());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, along.size()), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            const Vec3 d = mesh.points[i] - o.centre;
+            along[i] = {dot(d, axis[0]), dot(d, axis[1]), dot(d, axis[2])};
+        }
+    });
+    std::array<ViewAxes, kSheetViews> va;
+    std::array<int, kSheetViews> numBands;
+    for (std::size_t v = 0; v < kSheetViews; ++v) {
+        va[v] = viewAxes(layout.views[v], axis);
+        numBands[v] = (layout.views[v].frame.height + kBandRows - 1) / kBandRows;
+    }
+    // The band lists of the six views in one pass over the triangles: each triangle's extent
+    // along the three axes gives its box in every view.
+    const std::array<Bands, kSheetViews> bands = listBands(mesh.numTriangles(), numBands, [&](std::size_t t) {
+        const Triangle& tri = mesh.triangles[t];
+        const std::array<double, 3>&a = along[tri[0]], &b = along[tri[1]], &c = along[tri[2]];
+        std::array<double, 3> lo, hi, normal;
+        for (std::size_t k = 0; k < 3; ++k) lo[k] = std::min({a[k], b[k], c[k]}), hi[k] = std::max({a[k], b[k], c[k]});
+        for (std::size_t k = 0; k < 3; ++k) {
+            const std::size_t i = (k + 1) % 3, j = (k + 2) % 3;
+            normal[k] = (b[i] - a[i]) * (c[j] - a[j]) - (b[j] - a[j]) * (c[i] - a[i]);
+        }
+        std::array<BandRange, kSheetViews> ranges;
+        for (std::size_t v = 0; v < kSheetViews; ++v) {
+            const ViewAxes& x = va[v];
+            const double facing = x.ns * normal[x.n];
+            if (faces != RasterFaces::Both && !(faces == RasterFaces::Towards ? facing > 0 : facing < 0)) {
+                ranges[v] = kNoBands;
+                continue;
+            }
+            const double u0 = x.us > 0 ? lo[x.u] : -hi[x.u], u1 = x.us > 0 ? hi[x.u] : -lo[x.u];
+            const double v0 = x.vs > 0 ? lo[x.v] : -hi[x.v], v1 = x.vs > 0 ? hi[x.v] : -lo[x.v];
+            const MapFrame& f = layout.views[v].frame;
+            ranges[v] = bandsOfBox((u0 - f.minU) / f.pixelSize, (u1 - f.minU) / f.pixelSize,
+                                   (f.maxV - v1) / f.pixelSize, (f.maxV - v0) / f.pixelSize, f.width, f.height);
+        }
+        return ranges;
+    });
     ViewHits views;
     if (progress) progress->start("rasterising the views", std::size_t(kSheetViews));
-    for (std::size_t k = 0; k < kSheetViews; ++k) {
-        views[k] = rasterize(mesh, layout.views[k].frame);
+    std::vector<Projected> p(mesh.numVertices());
+    for (std::size_t v = 0; v < kSheetViews; ++v) {
+        const ViewAxes& x = va[v];
+        const MapFrame& f = layout.views[v].frame;
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.size()), [&](const auto& r) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                const std::array<double, 3>& c = along[i];
+                p[i] = {f.pixelX(x.us * c[x.u]), f.pixelY(x.vs * c[x.v]), x.ns * c[x.n]};
+            }
+        });
+        views[v] = emptyHits(f.width, f.height);
+        drawBands(mesh, p, bands[v], views[v], nullptr);
         if (progress) progress->advance();
     }
     if (progress) progress->end();
@@ -43,8 +158,8 @@ SheetSides sheetSides(const TriMesh& mesh, const std::vector<Vec3>& normals, con
 {
     if (normals.size() != mesh.numVertices()) throw InvalidInputError("the vertex normals do not match the mesh");
     SheetSides sides;
-    const SurfaceMoments m = surfaceMoments(mesh, false);
-    sides.closed = !(norm(m.vectorArea) > 0.01 * m.area);
+    sides.closed = layout.orientation.closed;
+    if (sides.closed) return sides;  // every side is there to see
     for (std::size_t v = 0; v < kSheetViews; ++v) {
         const PixelHits& hits = views[v];
         const Vec3& towards = layout.views[v].frame.normal;
@@ -56,7 +171,7 @@ SheetSides sheetSides(const TriMesh& mesh, const std::vector<Vec3>& normals, con
             facing += dot(n, towards) >= kFacingCosine * norm(n);
         }
         sides.facingShare[v] = covered > 0 ? double(facing) / double(covered) : 0.0;
-        if (!sides.closed) sides.scanned[v] = covered > 0 && 2 * facing >= covered;
+        sides.scanned[v] = covered > 0 && 2 * facing >= covered;
     }
     return sides;
 }

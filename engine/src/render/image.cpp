@@ -94,6 +94,8 @@ bool encodePng(const RgbImage& image, PngContext* ctx)
         return false;
     }
     png_set_write_fn(png, ctx, pngWrite, pngFlush);
+    // zlib level 3: as small as the default (6) on pictures, in half the time.
+    png_set_compression_level(png, 3);
     png_set_IHDR(png, info, png_uint_32(image.width), png_uint_32(image.height), 8,
                  PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                  PNG_FILTER_TYPE_DEFAULT);

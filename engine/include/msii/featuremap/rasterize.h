@@ -35,12 +35,20 @@ struct PixelHits {
     }
 };
 
-/// Rasterises every triangle of @p mesh into @p frame: a pixel belongs to the triangles whose
+/// Which triangles a picture draws, by their orientation (the order of their corners).
+enum class RasterFaces {
+    Both,     ///< all: open scans seen from behind still show
+    Towards,  ///< those whose normal points towards the viewer (a closed surface facing outward hides the others)
+    Away,     ///< those whose normal points away (a closed surface facing inward)
+};
+
+/// Rasterises the triangles of @p mesh into @p frame: a pixel belongs to the triangles whose
 /// closed projection contains its centre, and shows the one with the largest height (towards
-/// the viewer; ties go to the lower triangle index). Both orientations count (open scans seen
-/// from behind still show). Parallel over bands of rows; the result does not depend on the
-/// thread count.
-PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, RunContext* context = nullptr);
+/// the viewer; ties go to the lower triangle index). @p faces chooses the triangles by their
+/// orientation (all by default). Parallel over bands of rows; the result does not depend on
+/// the thread count.
+PixelHits rasterize(const TriMesh& mesh, const MapFrame& frame, RunContext* context = nullptr,
+                    RasterFaces faces = RasterFaces::Both);
 
 /// Unit vertex normals (mesh/vertex_normals.h) in the map frame: x along axisU, y along
 /// axisV, z towards the viewer; zero for vertices without area.

@@ -38,10 +38,14 @@ struct SheetOrientationOptions {
 
 struct SheetOrientation {
     Vec3 front, up;  ///< unit and orthogonal
-    /// How each was chosen: "given", "the scan's side", "the flatter side",
-    /// "third moment", "longest axis" (the axis of up given by front), "sign
-    /// convention".
+    /// How each was chosen: "given", "the scan's side", "the flatter side", "third moment",
+    /// "sign convention".
     std::string frontRule, upRule;
+    /// The surface's area-weighted centroid: the origin of the sheet's views.
+    Vec3 centre;
+    /// Closed: the surface's vector area is at most 1 % of its area (a closed surface's is
+    /// zero; a few small holes keep it small); every side of it is there to see.
+    bool closed = false;
     /// Right on the obverse: up × front (so that right, up and front are
     /// right-handed).
     Vec3 right() const { return cross(up, front); }
