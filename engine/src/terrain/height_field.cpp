@@ -826,6 +826,238 @@ void validate(const HeightGrid& grid, const GridRect& own, const HeightFieldOpti
                                 " in a row of this length)");
 }
 
+/// The heights with kLanes columns more on the right, so that a block of lanes past the own
+/// cells' last reads within the grid (those lanes are not used), with what the discs' sums
+/// read besides: per padded cell the extremes of the square of 2 × 2 cells from it, and per
+/// row the prefix sums of the heights.
+struct PaddedHeights {
+    explicit PaddedHeights(const HeightGrid& g) : stride(g.cols + kLanes), prefixStride(stride + 1) {}
+    std::ptrdiff_t stride, prefixStride;
+    std::vector<float> z, squareHigh, squareLow;
+    std::vector<long long> prefix;
+    /// What the sums read from cell (col, row) on.
+    DiscGrid at(int row, int col) const
+    {
+        const std::size_t i = std::size_t(row) * std::size_t(stride) + std::size_t(col);
+        return DiscGrid{&z[i], &squareHigh[i], &squareLow[i],
+                        &prefix[std::size_t(row) * std::size_t(prefixStride) + std::size_t(col)]};
+    }
+};
+
+/// Fills @p p from @p grid.
+void padHeights(const HeightGrid& grid, PaddedHeights& p)
+{
+    const std::ptrdiff_t stride = p.stride, prefixStride = p.prefixStride;
+    p.z.assign(std::size_t(stride) * std::size_t(grid.rows), 0.0f);
+    p.squareHigh.resize(p.z.size()), p.squareLow.resize(p.z.size());
+    p.prefix.resize(std::size_t(prefixStride) * std::size_t(grid.rows));
+    // Cells without a height take 0 in the padded grid (a disc that reads one gets no
+    // value). Per row the prefix sums of the heights in 2⁻²³ m.
+    tbb::parallel_for(0, grid.rows, [&](int row) {
+        float* z = &p.z[std::size_t(row) * std::size_t(stride)];
+        std::copy_n(&grid.z[std::size_t(row) * std::size_t(grid.cols)], grid.cols, z);
+        for (std::ptrdiff_t c = 0; c < stride; ++c)
+            if (std::isnan(z[c])) z[c] = 0;
+        long long* sum = &p.prefix[std::size_t(row) * std::size_t(prefixStride)];
+        sum[0] = 0;
+        for (std::ptrdiff_t c = 0; c < stride; ++c) sum[c + 1] = sum[c] + std::llrint(double(z[c]) * kHeightScale);
+    });
+    // Per padded cell, the largest and smallest height of the 2 × 2 cells from it (the
+    // last row and column: of the cells there are; no disc's square reaches past them).
+    tbb::parallel_for(0, grid.rows, [&](int row) {
+        const float* z = &p.z[std::size_t(row) * std::size_t(stride)];
+        const float* next = row + 1 < grid.rows ? z + stride : z;
+        float* high = &p.squareHigh[std::size_t(row) * std::size_t(stride)];
+        float* low = &p.squareLow[std::size_t(row) * std::size_t(stride)];
+        for (std::ptrdiff_t c = 0; c < stride; ++c) {
+            const std::ptrdiff_t right = std::min(c + 1, stride - 1);
+            high[c] = std::max(std::max(z[c], z[right]), std::max(next[c], next[right]));
+            low[c] = std::min(std::min(z[c], z[right]), std::min(next[c], next[right]));
+        }
+    });
+}
+
+/// The quadratures of the discs summed (sharedDisc), one disc per task, the largest radii
+/// first (their quadratures take longest).
+std::vector<std::shared_ptr<const DiscSamples>> discsOf(const SumRadii& sums, const HeightFieldOptions& options)
+{
+    std::vector<std::shared_ptr<const DiscSamples>> discs(sums.radius.size());
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, discs.size(), 1),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                const std::size_t k = discs.size() - 1 - i;
+                discs[k] = sharedDisc(sums.radius[k], options.cellWidth, options.cellHeight, sums.split[k]);
+            }
+        },
+        tbb::simple_partitioner());
+    return discs;
+}
+
+/// What a wanted radius's values come from: V(r) over the ball's volume, or for Ŝ the
+/// difference of V at r(1 ± δ) over that of the balls' volumes (the plans' slots).
+struct Stored {
+    std::size_t radius;      ///< j
+    bool sphere;             ///< Ŝ, else V̂
+    std::size_t slot, below; ///< the sum (Ŝ: at r(1 + δ)) and, for Ŝ, the one at r(1 − δ)
+    std::size_t needs;       ///< a lane with more discs than this has the value
+    double ball;             ///< ⁴⁄₃π r³, or its difference for Ŝ
+};
+
+/// The values of the wanted radii, each with the sums it comes from.
+std::vector<Stored> storedOf(const HeightFieldOptions& options, const SumRadii& sums, const DiscPlans& plans)
+{
+    // Where the volume of summed disc s (SumRadii's index) is, in the plans' order.
+    const std::size_t discCount = plans.discs.size();
+    std::vector<std::size_t> slot(discCount);
+    for (std::size_t k = 0; k < discCount; ++k) slot[plans.discs[k].index] = k;
+    std::vector<Stored> stored;
+    for (std::size_t j = 0; j < options.radii.size(); ++j) {
+        const double rj = options.radii[j];
+        if (sums.volumeOf[j] >= 0) {
+            const std::size_t at = slot[std::size_t(sums.volumeOf[j])];
+            stored.push_back({j, false, at, at, at, 4.0 / 3.0 * kPi * rj * rj * rj});
+        }
+        if (sums.belowOf[j] >= 0 && sums.aboveOf[j] >= 0) {
+            const double below = sums.radius[std::size_t(sums.belowOf[j])], above = sums.radius[std::size_t(sums.aboveOf[j])];
+            const std::size_t at = slot[std::size_t(sums.aboveOf[j])], under = slot[std::size_t(sums.belowOf[j])];
+            stored.push_back({j, true, at, under, std::max(at, under),
+                              4.0 / 3.0 * kPi * (above * above * above - below * below * below)});
+        }
+    }
+    return stored;
+}
+
+/// Sums the discs of the own rectangle's cells, a block of lanes at a time, and stores V̂
+/// and Ŝ from the sums.
+class RowSums {
+public:
+    RowSums(const HeightGrid& grid, const GridRect& own, const HeightFieldOptions& options,
+            const HeightCoverage& coverage, const PaddedHeights& heights, const DiscPlans& plans,
+            const std::vector<Stored>& stored, HeightFieldResult& result)
+        : grid(grid), own(own), options(options), coverage(coverage), heights(heights), plans(plans), stored(stored),
+          result(result), discCount(plans.discs.size()), reach(plans.discs.back().reach)
+    {
+    }
+
+    /// Own rows [begin, end).
+    void rows(int begin, int end, RunContext* context) const
+    {
+        std::vector<double> volume(discCount * kWide), one(discCount * kLanes);
+        std::size_t whole[kWide];
+        std::fill(whole, whole + kWide, discCount);
+        for (int r = begin; r < end; ++r) {
+            const int row = own.row + r;
+            for (int c = 0; c < own.cols; c += kLanes) {
+                // Most runs of kWide cells have every height of their largest discs, and
+                // lie farther than R from the grid's edge: summed together.
+                if (c + kWide <= own.cols && interior(own.col + c, own.col + c + kWide - 1, row)) {
+                    float z0[kWide];
+                    for (int k = 0; k < kWide; ++k) z0[k] = grid.at(own.col + c + k, row);
+                    sumDiscsWide(heights.at(row, own.col + c), plans, z0, discCount, volume.data(), options.vectorLanes);
+                    store(volume.data(), r, c, kWide, kWide, whole);
+                    c += kWide - kLanes;
+                    continue;
+                }
+                block(r, c, volume.data(), one.data());
+            }
+            if (context) context->advance();
+        }
+    }
+
+private:
+    /// The block of kLanes cells at own column c of own row r (fewer at the row's end).
+    void block(int r, int c, double* volume, double* one) const
+    {
+        const int row = own.row + r;
+        const int lanes = std::min(kLanes, own.cols - c);
+        std::size_t complete[kLanes];  // per lane: the discs, in the nested order, it has every height of
+        bool all = true;
+        if (!completeDiscs(c, row, lanes, complete, all)) return;
+        float z0[kLanes];
+        for (int k = 0; k < kLanes; ++k) z0[k] = k < lanes ? grid.at(own.col + c + k, row) : 0.0f;
+        const DiscGrid blockGrid = heights.at(row, own.col + c);
+        const bool inside = all && own.col + c - reach >= 0 && own.col + c + reach < grid.cols && row - reach >= 0 &&
+                            row + reach < grid.rows;
+        if (inside) {
+            sumDiscs(blockGrid, plans, z0, discCount, volume);
+        } else {
+            // Near the grid's edge or a gap: each lane alone, over the discs it has
+            // every height of, as lane 0 of a block whose other lanes read its
+            // neighbours within the padding, unused.
+            for (int k = 0; k < lanes; ++k) {
+                if (complete[k] == 0) continue;
+                float lane0[kLanes];
+                std::fill(lane0, lane0 + kLanes, z0[k]);
+                const DiscGrid laneGrid{blockGrid.z + k, blockGrid.squareHigh + k, blockGrid.squareLow + k, blockGrid.prefix + k};
+                sumDiscs(laneGrid, plans, lane0, complete[k], one);
+                for (std::size_t s = 0; s < complete[k]; ++s) volume[s * kLanes + std::size_t(k)] = one[s * kLanes];
+            }
+        }
+        store(volume, r, c, lanes, kLanes, complete);
+    }
+
+    /// Per lane of the block at own column c, the discs it has every height of, in the
+    /// nested order (@p complete); @p all becomes false where a lane lacks some. Returns
+    /// whether any lane has any.
+    bool completeDiscs(int c, int row, int lanes, std::size_t* complete, bool& all) const
+    {
+        // Most blocks have every height of their largest discs: that is tried first.
+        if (lanes == kLanes && coverage.complete(own.col + c, own.col + c + kLanes - 1, row, reach, grid.rows)) {
+            std::fill(complete, complete + kLanes, discCount);
+            return true;
+        }
+        bool any = false;
+        for (int k = 0; k < kLanes; ++k) {
+            const auto has = [&](std::size_t m) {
+                return coverage.complete(own.col + c + k, row, plans.discs[m].reach, grid.rows);
+            };
+            std::size_t m = 0;
+            if (k < lanes && has(discCount - 1))
+                m = discCount;
+            else
+                while (k < lanes && m + 1 < discCount && has(m)) ++m;
+            complete[k] = m;
+            all = all && (m == discCount || k >= lanes);
+            any = any || m > 0;
+        }
+        return any;
+    }
+
+    /// Whether the cells (col, row) to (last, row) have every height of their largest discs
+    /// and lie farther than R from the grid's edge.
+    bool interior(int col, int last, int row) const
+    {
+        return col - reach >= 0 && last + reach < grid.cols && row - reach >= 0 && row + reach < grid.rows &&
+               coverage.complete(col, last, row, reach, grid.rows);
+    }
+
+    /// The values of lanes [0, lanes) of the block at own column c from its sums (@p width
+    /// per disc), radius by radius, where the lane has the discs they need.
+    void store(const double* volume, int r, int c, int lanes, std::size_t width, const std::size_t* completeOf) const
+    {
+        const std::size_t cell = std::size_t(r) * std::size_t(own.cols) + std::size_t(c);
+        for (const Stored& o : stored) {
+            const double* v = &volume[o.slot * width];
+            const double* below = &volume[o.below * width];
+            float* out = &(o.sphere ? result.sphere : result.volume)[o.radius][cell];
+            for (int k = 0; k < lanes; ++k)
+                if (o.needs < completeOf[k]) out[k] = float(0.5 + (o.sphere ? v[k] - below[k] : v[k]) / o.ball);
+        }
+    }
+
+    const HeightGrid& grid;
+    const GridRect& own;
+    const HeightFieldOptions& options;
+    const HeightCoverage& coverage;
+    const PaddedHeights& heights;
+    const DiscPlans& plans;
+    const std::vector<Stored>& stored;
+    HeightFieldResult& result;
+    const std::size_t discCount;
+    const int reach;
+};
+
 } // namespace
 
 HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own, const HeightFieldOptions& options,
@@ -850,176 +1082,17 @@ HeightFieldResult computeHeightField(const HeightGrid& grid, const GridRect& own
     // Three things independent of one another, side by side: the discs' quadratures, which
     // cells have every height of a ball (HeightCoverage), and the padded heights with the
     // extremes of their squares of 2 × 2 cells and the rows' prefix sums.
-    std::vector<std::shared_ptr<const DiscSamples>> discs(sums.radius.size());
-    std::optional<HeightCoverage> coverageOf;
-    // The heights with kLanes columns more on the right, so that a block of lanes past the
-    // own cells' last reads within the grid (those lanes are not used).
-    const std::ptrdiff_t stride = grid.cols + kLanes;
-    const std::ptrdiff_t prefixStride = stride + 1;
-    std::vector<float> padded, squareHigh, squareLow;
-    std::vector<long long> prefix;
-    tbb::parallel_invoke(
-        [&] {
-            // One disc per task, the largest radii first (their quadratures take longest).
-            tbb::parallel_for(
-                tbb::blocked_range<std::size_t>(0, discs.size(), 1),
-                [&](const tbb::blocked_range<std::size_t>& range) {
-                    for (std::size_t i = range.begin(); i < range.end(); ++i) {
-                        const std::size_t k = discs.size() - 1 - i;
-                        discs[k] = sharedDisc(sums.radius[k], options.cellWidth, options.cellHeight, sums.split[k]);
-                    }
-                },
-                tbb::simple_partitioner());
-        },
-        [&] { coverageOf.emplace(grid); },
-        [&] {
-            padded.assign(std::size_t(stride) * std::size_t(grid.rows), 0.0f);
-            squareHigh.resize(padded.size()), squareLow.resize(padded.size());
-            prefix.resize(std::size_t(prefixStride) * std::size_t(grid.rows));
-            // Cells without a height take 0 in the padded grid (a disc that reads one gets no
-            // value). Per row the prefix sums of the heights in 2⁻²³ m.
-            tbb::parallel_for(0, grid.rows, [&](int row) {
-                float* z = &padded[std::size_t(row) * std::size_t(stride)];
-                std::copy_n(&grid.z[std::size_t(row) * std::size_t(grid.cols)], grid.cols, z);
-                for (std::ptrdiff_t c = 0; c < stride; ++c)
-                    if (std::isnan(z[c])) z[c] = 0;
-                long long* sum = &prefix[std::size_t(row) * std::size_t(prefixStride)];
-                sum[0] = 0;
-                for (std::ptrdiff_t c = 0; c < stride; ++c) sum[c + 1] = sum[c] + std::llrint(double(z[c]) * kHeightScale);
-            });
-            // Per padded cell, the largest and smallest height of the 2 × 2 cells from it (the
-            // last row and column: of the cells there are; no disc's square reaches past them).
-            tbb::parallel_for(0, grid.rows, [&](int row) {
-                const float* z = &padded[std::size_t(row) * std::size_t(stride)];
-                const float* next = row + 1 < grid.rows ? z + stride : z;
-                float* high = &squareHigh[std::size_t(row) * std::size_t(stride)];
-                float* low = &squareLow[std::size_t(row) * std::size_t(stride)];
-                for (std::ptrdiff_t c = 0; c < stride; ++c) {
-                    const std::ptrdiff_t right = std::min(c + 1, stride - 1);
-                    high[c] = std::max(std::max(z[c], z[right]), std::max(next[c], next[right]));
-                    low[c] = std::min(std::min(z[c], z[right]), std::min(next[c], next[right]));
-                }
-            });
-        });
-    const HeightCoverage& coverage = *coverageOf;
-    const DiscPlans plans = planDiscs(discs, options.cellWidth, options.cellHeight, stride);
-    const std::size_t discCount = plans.discs.size();
-    const int reach = plans.discs.back().reach;
-    // Where the volume of summed disc s (SumRadii's index) is, in the plans' order.
-    std::vector<std::size_t> slot(discCount);
-    for (std::size_t k = 0; k < discCount; ++k) slot[plans.discs[k].index] = k;
-
-    // What each wanted radius's values come from: V(r) over the ball's volume, or for Ŝ the
-    // difference of V at r(1 ± δ) over that of the balls' volumes (the plans' slots).
-    struct Stored {
-        std::size_t radius;      ///< j
-        bool sphere;             ///< Ŝ, else V̂
-        std::size_t slot, below; ///< the sum (Ŝ: at r(1 + δ)) and, for Ŝ, the one at r(1 − δ)
-        std::size_t needs;       ///< a lane with more discs than this has the value
-        double ball;             ///< ⁴⁄₃π r³, or its difference for Ŝ
-    };
-    std::vector<Stored> stored;
-    for (std::size_t j = 0; j < n; ++j) {
-        const double rj = options.radii[j];
-        if (sums.volumeOf[j] >= 0) {
-            const std::size_t at = slot[std::size_t(sums.volumeOf[j])];
-            stored.push_back({j, false, at, at, at, 4.0 / 3.0 * kPi * rj * rj * rj});
-        }
-        if (sums.belowOf[j] >= 0 && sums.aboveOf[j] >= 0) {
-            const double below = sums.radius[std::size_t(sums.belowOf[j])], above = sums.radius[std::size_t(sums.aboveOf[j])];
-            const std::size_t at = slot[std::size_t(sums.aboveOf[j])], under = slot[std::size_t(sums.belowOf[j])];
-            stored.push_back({j, true, at, under, std::max(at, under),
-                              4.0 / 3.0 * kPi * (above * above * above - below * below * below)});
-        }
-    }
+    std::vector<std::shared_ptr<const DiscSamples>> discs;
+    std::optional<HeightCoverage> coverage;
+    PaddedHeights heights(grid);
+    tbb::parallel_invoke([&] { discs = discsOf(sums, options); }, [&] { coverage.emplace(grid); },
+                         [&] { padHeights(grid, heights); });
+    const DiscPlans plans = planDiscs(discs, options.cellWidth, options.cellHeight, heights.stride);
+    const std::vector<Stored> stored = storedOf(options, sums, plans);
+    const RowSums rowSums(grid, own, options, *coverage, heights, plans, stored, result);
     if (context) context->start("V and S from the heights", std::size_t(own.rows));
-    tbb::parallel_for(tbb::blocked_range<int>(0, own.rows), [&](const tbb::blocked_range<int>& range) {
-        std::vector<double> volume(discCount * kWide), one(discCount * kLanes);
-        std::size_t complete[kLanes];  // per lane: the discs, in the nested order, it has every height of
-        // The values of lanes [0, lanes) of the block at own column c from its sums (@p width per disc).
-        // The values of lanes [0, lanes) of the block at own column c from its sums (@p width
-        // per disc), radius by radius, where the lane has the discs they need.
-        const auto store = [&](int r, int c, int lanes, std::size_t width, const std::size_t* completeOf) {
-            const std::size_t cell = std::size_t(r) * std::size_t(own.cols) + std::size_t(c);
-            for (const Stored& o : stored) {
-                const double* v = &volume[o.slot * width];
-                const double* below = &volume[o.below * width];
-                float* out = &(o.sphere ? result.sphere : result.volume)[o.radius][cell];
-                for (int k = 0; k < lanes; ++k)
-                    if (o.needs < completeOf[k]) out[k] = float(0.5 + (o.sphere ? v[k] - below[k] : v[k]) / o.ball);
-            }
-        };
-        const auto gridAt = [&](int row, int col) {
-            const std::size_t at = std::size_t(row) * std::size_t(stride) + std::size_t(col);
-            return DiscGrid{&padded[at], &squareHigh[at], &squareLow[at],
-                            &prefix[std::size_t(row) * std::size_t(prefixStride) + std::size_t(col)]};
-        };
-        const auto interior = [&](int col, int last, int row) {
-            return col - reach >= 0 && last + reach < grid.cols && row - reach >= 0 && row + reach < grid.rows &&
-                   coverage.complete(col, last, row, reach, grid.rows);
-        };
-        std::size_t whole[kWide];
-        std::fill(whole, whole + kWide, discCount);
-        for (int r = range.begin(); r < range.end(); ++r) {
-            const int row = own.row + r;
-            for (int c = 0; c < own.cols; c += kLanes) {
-                // Most runs of kWide cells have every height of their largest discs, and
-                // lie farther than R from the grid's edge: summed together.
-                if (c + kWide <= own.cols && interior(own.col + c, own.col + c + kWide - 1, row)) {
-                    float z0[kWide];
-                    for (int k = 0; k < kWide; ++k) z0[k] = grid.at(own.col + c + k, row);
-                    sumDiscsWide(gridAt(row, own.col + c), plans, z0, discCount, volume.data(), options.vectorLanes);
-                    store(r, c, kWide, kWide, whole);
-                    c += kWide - kLanes;
-                    continue;
-                }
-                const int lanes = std::min(kLanes, own.cols - c);
-                bool all = true, any = false;
-                // Most blocks have every height of their largest discs: that is tried first.
-                if (lanes == kLanes && coverage.complete(own.col + c, own.col + c + kLanes - 1, row, reach, grid.rows)) {
-                    std::fill(complete, complete + kLanes, discCount);
-                    any = true;
-                } else {
-                    for (int k = 0; k < kLanes; ++k) {
-                        const auto has = [&](std::size_t m) {
-                            return coverage.complete(own.col + c + k, row, plans.discs[m].reach, grid.rows);
-                        };
-                        std::size_t m = 0;
-                        if (k < lanes && has(discCount - 1))
-                            m = discCount;
-                        else
-                            while (k < lanes && m + 1 < discCount && has(m)) ++m;
-                        complete[k] = m;
-                        all = all && (m == discCount || k >= lanes);
-                        any = any || m > 0;
-                    }
-                }
-                if (!any) continue;
-                float z0[kLanes];
-                for (int k = 0; k < kLanes; ++k) z0[k] = k < lanes ? grid.at(own.col + c + k, row) : 0.0f;
-                const DiscGrid blockGrid = gridAt(row, own.col + c);
-                const bool inside = all && own.col + c - reach >= 0 && own.col + c + reach < grid.cols && row - reach >= 0 &&
-                                    row + reach < grid.rows;
-                if (inside) {
-                    sumDiscs(blockGrid, plans, z0, discCount, volume.data());
-                } else {
-                    // Near the grid's edge or a gap: each lane alone, over the discs it has
-                    // every height of, as lane 0 of a block whose other lanes read its
-                    // neighbours within the padding, unused.
-                    for (int k = 0; k < lanes; ++k) {
-                        if (complete[k] == 0) continue;
-                        float lane0[kLanes];
-                        std::fill(lane0, lane0 + kLanes, z0[k]);
-                        const DiscGrid laneGrid{blockGrid.z + k, blockGrid.squareHigh + k, blockGrid.squareLow + k, blockGrid.prefix + k};
-                        sumDiscs(laneGrid, plans, lane0, complete[k], one.data());
-                        for (std::size_t s = 0; s < complete[k]; ++s) volume[s * kLanes + std::size_t(k)] = one[s * kLanes];
-                    }
-                }
-                store(r, c, lanes, kLanes, complete);
-            }
-            if (context) context->advance();
-        }
-    });
+    tbb::parallel_for(tbb::blocked_range<int>(0, own.rows),
+                      [&](const tbb::blocked_range<int>& range) { rowSums.rows(range.begin(), range.end(), context); });
     if (context) context->end();
     result.seconds = clock.seconds();
     return result;
