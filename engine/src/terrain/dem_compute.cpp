@@ -492,6 +492,199 @@ std::vector<std::vector<float>> computeWindow(const Window& win, const WindowLay
     return bandsOf(win, dm, r, result.bands);
 }
 
+/// The kinds of the continued grid's cells (GridCell), and of its squares of 2 × 2 cells.
+struct GridKinds {
+    const GridContinuationResult& g;
+    /// Cell (c, r)'s kind; None outside the grid.
+    GridCell at(int c, int r) const
+    {
+        if (c < 0 || r < 0 || c >= g.grid.cols || r >= g.grid.rows) return GridCell::None;
+        return g.kind[std::size_t(r) * std::size_t(g.grid.cols) + std::size_t(c)];
+    }
+    /// Whether the square from cell (c, r) has four heights of the DEM's.
+    bool given(int c, int r) const
+    {
+        return at(c, r) == GridCell::Height && at(c + 1, r) == GridCell::Height && at(c, r + 1) == GridCell::Height &&
+               at(c + 1, r + 1) == GridCell::Height;
+    }
+    /// Whether it has a filled or continued corner.
+    bool added(int c, int r) const
+    {
+        for (const auto& [dx, dy] : {std::pair{0, 0}, std::pair{1, 0}, std::pair{0, 1}, std::pair{1, 1}}) {
+            const GridCell k = at(c + dx, r + dy);
+            if (k == GridCell::Filled || k == GridCell::Continued) return true;
+        }
+        return false;
+    }
+};
+
+/// The squares with a filled or continued corner counted over rectangles (a summed-area
+/// table, in 32-bit integers whose differences wrap exactly), so that a cell whose ball's
+/// bounding square has none gets 0 without its disc's squares: most cells are far from
+/// the fills and the continuation.
+class AddedSquares {
+public:
+    AddedSquares(const GridKinds& kinds, const DiscSquares& disc) : gc(kinds.g.grid.cols), gr(kinds.g.grid.rows)
+    {
+        if (disc.area.empty()) return;
+        dcLow = *std::min_element(disc.column.begin(), disc.column.end());
+        dcHigh = *std::max_element(disc.column.begin(), disc.column.end());
+        drLow = *std::min_element(disc.row.begin(), disc.row.end());
+        drHigh = *std::max_element(disc.row.begin(), disc.row.end());
+        addedBelow.assign(std::size_t(gc + 1) * std::size_t(gr + 1), 0);
+        tbb::parallel_for(0, gr, [&](int r) {
+            std::uint32_t running = 0;
+            std::uint32_t* out = &addedBelow[std::size_t(r + 1) * std::size_t(gc + 1)];
+            for (int c = 0; c < gc; ++c) out[c + 1] = running += kinds.added(c, r) ? 1u : 0u;
+        });
+        for (int r = 1; r <= gr; ++r) {
+            std::uint32_t* out = &addedBelow[std::size_t(r) * std::size_t(gc + 1)];
+            const std::uint32_t* above = out - (gc + 1);
+            for (int c = 0; c <= gc; ++c) out[c] += above[c];
+        }
+    }
+    /// Whether any square of the disc's bounding square around cell (c, r) has one.
+    bool any(int c, int r) const
+    {
+        const int c0 = std::max(0, c + dcLow), c1 = std::min(gc, c + dcHigh + 1), r0 = std::max(0, r + drLow),
+                  r1 = std::min(gr, r + drHigh + 1);
+        if (c0 >= c1 || r0 >= r1) return false;
+        const auto at = [&](int x, int y) { return addedBelow[std::size_t(y) * std::size_t(gc + 1) + std::size_t(x)]; };
+        return at(c1, r1) - at(c0, r1) - at(c1, r0) + at(c0, r0) != 0;
+    }
+
+private:
+    int gc, gr;
+    std::vector<std::uint32_t> addedBelow;  // (gc + 1) × (gr + 1): squares (< c, < r) added
+    int dcLow = 0, dcHigh = -1, drLow = 0, drHigh = -1;
+};
+
+/// Per square of 2 × 2 cells from the own cells' row and column before them on, whether it
+/// has four heights of the DEM's ((cols + 1) × (rows + 1), row by row).
+std::vector<char> givenSquares(const GridKinds& kinds, const GridRect& own, const Window& win)
+{
+    const GridContinuationResult& g = kinds.g;
+    const int gc = g.grid.cols, gr = g.grid.rows;
+    const std::size_t sc = std::size_t(win.cols) + 1;
+    std::vector<char> givenSquare(sc * (std::size_t(win.rows) + 1));
+    tbb::parallel_for(0, win.rows + 1, [&](int y) {
+        char* out = &givenSquare[std::size_t(y) * sc];
+        const int r = own.row - 1 + y, c0 = own.col - 1;
+        if (r < 0 || r + 1 >= gr || c0 < 0 || c0 + int(sc) >= gc) {  // at the grid's edge
+            for (std::size_t x = 0; x < sc; ++x) out[x] = kinds.given(c0 + int(x), r);
+            return;
+        }
+        const GridCell* k0 = &g.kind[std::size_t(r) * std::size_t(gc) + std::size_t(c0)];
+        const GridCell* k1 = k0 + gc;
+        for (std::size_t x = 0; x < sc; ++x)
+            out[x] = (k0[x] == GridCell::Height) & (k0[x + 1] == GridCell::Height) & (k1[x] == GridCell::Height) &
+                     (k1[x + 1] == GridCell::Height);
+    });
+    return givenSquare;
+}
+
+/// The own cells on the surface, their filled_share, and the squares of the DEM's
+/// heights (two triangles each on the mesh route).
+struct OwnSurface {
+    std::vector<char> onSurface;
+    std::vector<float> filledShare;
+    std::size_t squares = 0;
+};
+
+/// An own cell with a height is on the surface where one of its four squares has four
+/// heights of the DEM's, as a vertex of the DEM's mesh is in a face (a filled hole adds
+/// faces only between the heights on its rim). filled_share: the area of the squares
+/// inside the ball at R with a filled or continued corner, over πR², as the mesh's fill
+/// and skirt (docs/method.md, Filled share); computed only where @p wantsShare.
+OwnSurface ownSurface(const GridContinuationResult& g, const GridRect& own, const Window& win, const WindowLayout& w,
+                      bool wantsShare)
+{
+    const std::size_t nOwn = std::size_t(win.cols) * std::size_t(win.rows);
+    const GridKinds kinds{g};
+    OwnSurface s;
+    s.filledShare.assign(nOwn, std::numeric_limits<float>::quiet_NaN());
+    const DiscSquares disc =
+        wantsShare ? discSquares(w.kernel.radii.back(), w.kernel.cellWidth, w.kernel.cellHeight) : DiscSquares();
+    const double discArea = 3.14159265358979323846 * w.kernel.radii.back() * w.kernel.radii.back();
+    const AddedSquares addedNear(kinds, disc);
+    // Row by row in parallel: the squares with four heights (from the own cells' row and
+    // column before them on), then the cells in a face.
+    const std::size_t sc = std::size_t(win.cols) + 1;
+    const std::vector<char> givenSquare = givenSquares(kinds, own, win);
+    std::vector<std::size_t> squaresOfRow(std::size_t(win.rows), 0);
+    s.onSurface.assign(nOwn, 0);
+    tbb::parallel_for(0, win.rows, [&](int y) {
+        const char* above = &givenSquare[std::size_t(y) * sc];
+        const char* here = above + sc;
+        // (inside the grid)
+        const GridCell* cellKinds = &g.kind[std::size_t(own.row + y) * std::size_t(g.grid.cols) + std::size_t(own.col)];
+        for (int x = 0; x < win.cols; ++x) {
+            const int c = own.col + x, r = own.row + y;
+            if (cellKinds[x] != GridCell::Height) continue;
+            squaresOfRow[std::size_t(y)] += here[x + 1];
+            if (!here[x + 1] && !here[x] && !above[x + 1] && !above[x]) continue;
+            const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x);
+            s.onSurface[k] = 1;
+            double share = 0;
+            if (!disc.area.empty() && addedNear.any(c, r))
+                for (std::size_t i = 0; i < disc.area.size(); ++i)
+                    if (kinds.added(c + disc.column[i], r + disc.row[i])) share += disc.area[i];
+            s.filledShare[k] = float(std::min(1.0, share / discArea));
+        }
+    });
+    for (const std::size_t n : squaresOfRow) s.squares += n;
+    return s;
+}
+
+/// The bands of the own cells (row by row) from @p props: a property's values become its
+/// band (moved where no later band names it again), nodata where not on the surface;
+/// `height` is the DEM's own heights.
+void ownBands(std::vector<VertexProperty>& props, const Window& win, const std::vector<char>& onSurface,
+              const std::vector<std::string>& bands, std::vector<std::vector<float>>& cells)
+{
+    const std::size_t nOwn = std::size_t(win.cols) * std::size_t(win.rows);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (std::size_t b = 0; b < bands.size(); ++b) {
+        const std::string& name = bands[b];
+        const bool height = name == "height";  // found once per band, not per cell
+        const auto p = std::find_if(props.begin(), props.end(), [&](const VertexProperty& q) { return q.name == name; });
+        if (!height && p == props.end())
+            throw InvalidInputError("the band '" + name + "' is none of the features computed (names as msii writes them, e.g. V_04)");
+        const bool again = std::find(bands.begin() + std::ptrdiff_t(b) + 1, bands.end(), name) != bands.end();
+        if (!height && !again) cells[b] = std::move(p->values);
+        else if (!height) cells[b] = p->values;
+        else cells[b].resize(nOwn);
+        tbb::parallel_for(0, win.rows, [&](int y) {
+            for (int x = 0; x < win.cols; ++x) {
+                const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x);
+                // Not on the surface: nodata in every band but the height.
+                if (height) cells[b][k] = win.dem.heights[win.boxCell(win.col + x, win.row + y)];
+                else if (!onSurface[k]) cells[b][k] = nan;
+            }
+        });
+    }
+}
+
+/// What the grid's filling and continuation did, as diagnostics: the holes filled, and the
+/// cells continued @p margin cells wide.
+void addContinuationDiagnostics(const GridContinuationResult& g, int margin, double cell, DiagnosticSum& diagnostics)
+{
+    if (g.gapsFilled > 0) {
+        std::ostringstream msg;
+        msg.precision(3);
+        msg << "filled " << g.gapsFilled << (g.gapsFilled == 1 ? " hole" : " holes") << " (nodata gaps)"
+            << " for the computation (the longest " << g.largestFilledPerimeter << " around, " << g.cellsFilled
+            << " cells); values near them rest partly on the filled surface (filled_share)";
+        diagnostics.add({"holes_filled", g.gapsFilled, {{"largest_perimeter", g.largestFilledPerimeter}}, msg.str()});
+    }
+    if (g.cellsContinued > 0) {
+        std::ostringstream msg;
+        msg << "continued the surface past the DEM's edge and the gaps too large to fill for the computation, "
+            << margin << " cells wide; values within R of them rest partly on the continuation (filled_share)";
+        diagnostics.add({"borders_continued", g.cellsContinued, {{"width", margin * cell}}, msg.str()});
+    }
+}
+
 /// Computes window @p win on the height-field route: the box's gaps filled and its borders
 /// continued on the grid, V and S of its own cells from the heights, filled_share from the
 /// same hat weights at R. Adds its diagnostics, masked own cells and time to @p result;
@@ -516,103 +709,9 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
     HeightFieldResult hf = computeHeightField(g.grid, own, w.kernel, context);
     result.heightFieldSeconds += hf.seconds;
     clock.restart();
-    // An own cell with a height is on the surface where one of its four squares has four
-    // heights of the DEM's, as a vertex of the DEM's mesh is in a face (a filled hole adds
-    // faces only between the heights on its rim). filled_share: the area of the squares
-    // inside the ball at R with a filled or continued corner, over πR², as the mesh's fill
-    // and skirt (docs/method.md, Filled share).
-    const std::size_t nOwn = std::size_t(win.cols) * std::size_t(win.rows);
-    const auto kindAt = [&](int c, int r) {
-        if (c < 0 || r < 0 || c >= g.grid.cols || r >= g.grid.rows) return GridCell::None;
-        return g.kind[std::size_t(r) * std::size_t(g.grid.cols) + std::size_t(c)];
-    };
-    const auto given = [&](int c, int r) {
-        return kindAt(c, r) == GridCell::Height && kindAt(c + 1, r) == GridCell::Height &&
-               kindAt(c, r + 1) == GridCell::Height && kindAt(c + 1, r + 1) == GridCell::Height;
-    };
-    const auto added = [&](int c, int r) {
-        for (const auto& [dx, dy] : {std::pair{0, 0}, std::pair{1, 0}, std::pair{0, 1}, std::pair{1, 1}}) {
-            const GridCell k = kindAt(c + dx, r + dy);
-            if (k == GridCell::Filled || k == GridCell::Continued) return true;
-        }
-        return false;
-    };
-    std::vector<float> filledShare(nOwn, nan);
     const bool wantsShare = std::find(result.bands.begin(), result.bands.end(), "filled_share") != result.bands.end();
-    const DiscSquares disc =
-        wantsShare ? discSquares(w.kernel.radii.back(), w.kernel.cellWidth, w.kernel.cellHeight) : DiscSquares();
-    const double discArea = 3.14159265358979323846 * w.kernel.radii.back() * w.kernel.radii.back();
-    // The squares with a filled or continued corner counted over rectangles (a summed-area
-    // table, in 32-bit integers whose differences wrap exactly), so that a cell whose ball's
-    // bounding square has none gets 0 without its disc's squares: most cells are far from
-    // the fills and the continuation.
-    const int gc = g.grid.cols, gr = g.grid.rows;
-    std::vector<std::uint32_t> addedBelow;  // (gc + 1) × (gr + 1): squares (< c, < r) added
-    int dcLow = 0, dcHigh = -1, drLow = 0, drHigh = -1;
-    if (!disc.area.empty()) {
-        dcLow = *std::min_element(disc.column.begin(), disc.column.end());
-        dcHigh = *std::max_element(disc.column.begin(), disc.column.end());
-        drLow = *std::min_element(disc.row.begin(), disc.row.end());
-        drHigh = *std::max_element(disc.row.begin(), disc.row.end());
-        addedBelow.assign(std::size_t(gc + 1) * std::size_t(gr + 1), 0);
-        tbb::parallel_for(0, gr, [&](int r) {
-            std::uint32_t running = 0;
-            std::uint32_t* out = &addedBelow[std::size_t(r + 1) * std::size_t(gc + 1)];
-            for (int c = 0; c < gc; ++c) out[c + 1] = running += added(c, r) ? 1u : 0u;
-        });
-        for (int r = 1; r <= gr; ++r) {
-            std::uint32_t* out = &addedBelow[std::size_t(r) * std::size_t(gc + 1)];
-            const std::uint32_t* above = out - (gc + 1);
-            for (int c = 0; c <= gc; ++c) out[c] += above[c];
-        }
-    }
-    const auto anyAdded = [&](int c, int r) {
-        const int c0 = std::max(0, c + dcLow), c1 = std::min(gc, c + dcHigh + 1), r0 = std::max(0, r + drLow),
-                  r1 = std::min(gr, r + drHigh + 1);
-        if (c0 >= c1 || r0 >= r1) return false;
-        const auto at = [&](int x, int y) { return addedBelow[std::size_t(y) * std::size_t(gc + 1) + std::size_t(x)]; };
-        return at(c1, r1) - at(c0, r1) - at(c1, r0) + at(c0, r0) != 0;
-    };
-    // Row by row in parallel: the squares with four heights (from the own cells' row and
-    // column before them on), then the cells in a face.
-    const std::size_t sc = std::size_t(win.cols) + 1;
-    std::vector<char> givenSquare(sc * (std::size_t(win.rows) + 1));
-    tbb::parallel_for(0, win.rows + 1, [&](int y) {
-        char* out = &givenSquare[std::size_t(y) * sc];
-        const int r = own.row - 1 + y, c0 = own.col - 1;
-        if (r < 0 || r + 1 >= gr || c0 < 0 || c0 + int(sc) >= gc) {  // at the grid's edge
-            for (std::size_t x = 0; x < sc; ++x) out[x] = given(c0 + int(x), r);
-            return;
-        }
-        const GridCell* k0 = &g.kind[std::size_t(r) * std::size_t(gc) + std::size_t(c0)];
-        const GridCell* k1 = k0 + gc;
-        for (std::size_t x = 0; x < sc; ++x)
-            out[x] = (k0[x] == GridCell::Height) & (k0[x + 1] == GridCell::Height) & (k1[x] == GridCell::Height) &
-                     (k1[x + 1] == GridCell::Height);
-    });
-    std::vector<std::size_t> squaresOfRow(std::size_t(win.rows), 0);
-    std::vector<char> onSurface(nOwn, 0);
-    tbb::parallel_for(0, win.rows, [&](int y) {
-        const char* above = &givenSquare[std::size_t(y) * sc];
-        const char* here = above + sc;
-        const GridCell* kinds = &g.kind[std::size_t(own.row + y) * std::size_t(gc) + std::size_t(own.col)];  // (inside the grid)
-        for (int x = 0; x < win.cols; ++x) {
-            const int c = own.col + x, r = own.row + y;
-            if (kinds[x] != GridCell::Height) continue;
-            squaresOfRow[std::size_t(y)] += here[x + 1];
-            if (!here[x + 1] && !here[x] && !above[x + 1] && !above[x]) continue;
-            const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x);
-            onSurface[k] = 1;
-            double share = 0;
-            if (!disc.area.empty() && anyAdded(c, r))
-                for (std::size_t i = 0; i < disc.area.size(); ++i)
-                    if (added(c + disc.column[i], r + disc.row[i])) share += disc.area[i];
-            filledShare[k] = float(std::min(1.0, share / discArea));
-        }
-    });
-    std::size_t squares = 0;
-    for (const std::size_t n : squaresOfRow) squares += n;
-    result.triangles += 2 * squares;
+    OwnSurface surface = ownSurface(g, own, win, w, wantsShare);
+    result.triangles += 2 * surface.squares;
     // The bands, from the columns computed (those of the radii the bands need; the others
     // are empty and give no property, io/feature_properties.h).
     FeatureSet features;
@@ -620,43 +719,10 @@ std::vector<std::vector<float>> computeHeightWindow(const Window& win, const Win
     // (moved, not copied: a window's columns are tens of MB each)
     if (!hf.volume.empty()) features[Invariant::Volume] = std::move(hf.volume);
     if (!hf.sphere.empty()) features[Invariant::Sphere] = std::move(hf.sphere);
-    result.masked.addWhere(features, filledShare, onSurface);
-    std::vector<VertexProperty> props = outputProperties(std::move(features), std::move(filledShare));
-    for (std::size_t b = 0; b < result.bands.size(); ++b) {
-        const std::string& name = result.bands[b];
-        const bool height = name == "height";  // found once per band, not per cell
-        const auto p = std::find_if(props.begin(), props.end(), [&](const VertexProperty& q) { return q.name == name; });
-        if (!height && p == props.end())
-            throw InvalidInputError("the band '" + name + "' is none of the features computed (names as msii writes them, e.g. V_04)");
-        // A property's values per own cell become its band (moved where no later band names
-        // it again), nodata where not on the surface.
-        const bool again = std::find(result.bands.begin() + std::ptrdiff_t(b) + 1, result.bands.end(), name) != result.bands.end();
-        if (!height && !again) cells[b] = std::move(p->values);
-        else if (!height) cells[b] = p->values;
-        else cells[b].resize(nOwn);
-        tbb::parallel_for(0, win.rows, [&](int y) {
-            for (int x = 0; x < win.cols; ++x) {
-                const std::size_t k = std::size_t(y) * std::size_t(win.cols) + std::size_t(x);
-                // Not on the surface: nodata in every band but the height.
-                if (height) cells[b][k] = win.dem.heights[win.boxCell(win.col + x, win.row + y)];
-                else if (!onSurface[k]) cells[b][k] = nan;
-            }
-        });
-    }
-    if (g.gapsFilled > 0) {
-        std::ostringstream msg;
-        msg.precision(3);
-        msg << "filled " << g.gapsFilled << (g.gapsFilled == 1 ? " hole" : " holes") << " (nodata gaps)"
-            << " for the computation (the longest " << g.largestFilledPerimeter << " around, " << g.cellsFilled
-            << " cells); values near them rest partly on the filled surface (filled_share)";
-        diagnostics.add({"holes_filled", g.gapsFilled, {{"largest_perimeter", g.largestFilledPerimeter}}, msg.str()});
-    }
-    if (g.cellsContinued > 0) {
-        std::ostringstream msg;
-        msg << "continued the surface past the DEM's edge and the gaps too large to fill for the computation, "
-            << m << " cells wide; values within R of them rest partly on the continuation (filled_share)";
-        diagnostics.add({"borders_continued", g.cellsContinued, {{"width", m * w.cell}}, msg.str()});
-    }
+    result.masked.addWhere(features, surface.filledShare, surface.onSurface);
+    std::vector<VertexProperty> props = outputProperties(std::move(features), std::move(surface.filledShare));
+    ownBands(props, win, surface.onSurface, result.bands, cells);
+    addContinuationDiagnostics(g, m, w.cell, diagnostics);
     result.prepareSeconds += clock.seconds();
     return cells;
 }
