@@ -43,64 +43,68 @@ int demScales(const ComputeArgs& args, const std::string& input)
     return std::clamp(int(std::floor(args.radius / shortestCellStep(dem.info().georeference) + 1e-9)), 4, 16);
 }
 
-} // namespace
-
-OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, const std::string& output)
+/// The options a DEM refuses: those of meshes alone, and tiles (rasters take windows).
+void refuseMeshOptions(const ComputeArgs& args)
 {
-    ComputeArgs args = given;
-    args.scales = demScales(given, input);
-    const Stopwatch total;
     if (args.exact) throw InvalidInputError("--exact is for meshes; for a DEM, compute its mesh (msii-samples writes none: use the fast mode)");
     if (args.gigamesh) throw InvalidInputError("--gigamesh is for meshes, not rasters");
     if (args.tiles > 0) throw InvalidInputError("rasters are computed in windows: use --memory-budget or --window-cells, not --tiles");
-    DemComputeOptions options;
-    options.compute = computeOptionsOf(args);
-    if (!args.bands.empty()) {
-        try {
-            options.bands = parseFeatureNames(args.bands, demBandNames(options.compute));
-        } catch (const InvalidInputError& e) {
-            throw InvalidInputError(std::string("--bands: ") + e.what());
-        }
+}
+
+/// --bands as the output's band names (those the DEM can have), an error naming the option.
+void parseBands(const ComputeArgs& args, DemComputeOptions& options)
+{
+    if (args.bands.empty()) return;
+    try {
+        options.bands = parseFeatureNames(args.bands, demBandNames(options.compute));
+    } catch (const InvalidInputError& e) {
+        throw InvalidInputError(std::string("--bands: ") + e.what());
     }
-    const std::string sidecar = sidecarPathFor(output);
-    checkOutputs({output, sidecar}, args.overwrite);
-    options.band = args.band;
-    options.windowCells = args.windowCells;
-    options.float32 = args.float32;
-    options.engine = args.engine == "mesh" ? DemEngine::Mesh : DemEngine::HeightField;
-    if (!args.tileOfMosaic.empty()) options.region = regionOfPart(input, args.tileOfMosaic);
+}
+
+/// The output's description (its TIFFTAG_IMAGEDESCRIPTION, and the PLY's comment): the
+/// program, R, N, the input and what the bands and NaN mean.
+std::string rasterDescription(const ComputeArgs& args, const std::string& input)
+{
     std::ostringstream description;
     description << "msii " << versionString() << " compute R=" << args.radius << " N=" << args.scales << " of "
                 << fs::path(input).filename().string() << "; " << featureLegend()
                 << (args.border == "mask" ? "; NaN = nodata or ball reaches the border"
                                           : "; NaN = nodata; filled_share = share of the ball on continued or filled surface");
-    options.output.description = description.str();
+    return description.str();
+}
+
+/// The output's further metadata: the radii, the version and the input.
+std::vector<std::pair<std::string, std::string>> rasterMetadata(const ComputeArgs& args, const std::string& input,
+                                                                const std::string& output)
+{
     std::ostringstream radii;
     for (int j = 1; j <= args.scales; ++j) radii << (j > 1 ? "," : "") << args.radius * j / args.scales;
-    options.output.metadata = {{"MSII_RADII", radii.str()},
-                               {"MSII_VERSION", versionString()},
-                               // Relative to the output's folder: found again when both move together.
-                               {"MSII_INPUT", fs::absolute(input).lexically_relative(fs::absolute(output).parent_path()).string()}};
+    return {{"MSII_RADII", radii.str()},
+            {"MSII_VERSION", versionString()},
+            // Relative to the output's folder: found again when both move together.
+            {"MSII_INPUT", fs::absolute(input).lexically_relative(fs::absolute(output).parent_path()).string()}};
+}
 
-    // A .ply name: the DEM's mesh with the bands as vertex properties (as msii metric writes
-    // one), through a GeoTIFF beside it that is removed once the PLY is written.
-    const bool ply = fs::path(output).extension() == ".ply";
-    const std::string rasterOutput = ply ? output + ".part.tif" : output;
-    struct RemoveOnExit {
-        std::string path;
-        ~RemoveOnExit()
-        {
-            if (!path.empty()) {
-                std::error_code ec;
-                fs::remove(path, ec);
-            }
+/// Removes a file when it goes out of scope (the GeoTIFF a PLY output is written through).
+struct RemoveOnExit {
+    std::string path;
+    ~RemoveOnExit()
+    {
+        if (!path.empty()) {
+            std::error_code ec;
+            fs::remove(path, ec);
         }
-    } removeRaster{ply ? rasterOutput : std::string()};
-    TerminalProgress terminal(progressStyle(args));
-    RunContext progress(terminal.listener());
-    DemComputeResult result;
+    }
+};
+
+/// computeDem, its errors worded for the command line: the option that chooses, and the
+/// input's name first.
+DemComputeResult computeDemWorded(const std::string& input, const std::string& rasterOutput,
+                                  const DemComputeOptions& options, RunContext& progress)
+{
     try {
-        result = computeDem(input, rasterOutput, options, &progress);
+        return computeDem(input, rasterOutput, options, &progress);
     } catch (const InvalidInputError& e) {
         std::string what = e.what();
         const std::string name = fs::path(input).filename().string();
@@ -111,20 +115,56 @@ OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, c
             what += " (--memory-budget sets the memory a window may take)";
         throw InvalidInputError(what.rfind(name, 0) == 0 ? what : name + ": " + what);
     }
-    if (ply) {
-        FeatureMesh mesh = featureMeshFromRaster(rasterOutput);
-        WritePlyOptions po;
-        po.propertyPrefix = args.propertyPrefix;
-        po.comments = mesh.comments;
-        po.comments.push_back(description.str() + " (quality: a plane's value where NaN)");
-        qualityWithoutNaN(mesh.properties);
-        writePly(output, mesh.mesh, mesh.properties, po);
-    }
-    const RasterGeoreference& grid = result.input.georeference;
-    if (!args.quiet)
-        for (const Diagnostic& d : result.diagnostics)
-            std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), printableLine(worded(d)).c_str());
+}
 
+/// A .ply output: the DEM's mesh with the raster's bands as vertex properties.
+void writeRasterPly(const ComputeArgs& args, const std::string& rasterOutput, const std::string& output,
+                    const std::string& description)
+{
+    FeatureMesh mesh = featureMeshFromRaster(rasterOutput);
+    WritePlyOptions po;
+    po.propertyPrefix = args.propertyPrefix;
+    po.comments = mesh.comments;
+    po.comments.push_back(description + " (quality: a plane's value where NaN)");
+    qualityWithoutNaN(mesh.properties);
+    writePly(output, mesh.mesh, mesh.properties, po);
+}
+
+/// The record's "raster": the grid, its cells, the bands and the windows computed.
+nlohmann::json rasterRecord(const ComputeArgs& args, const DemComputeOptions& options, const DemComputeResult& result)
+{
+    const RasterGeoreference& grid = result.input.georeference;
+    nlohmann::json raster = {{"width", grid.width},
+                             {"height", grid.height},
+                             {"geotransform", grid.transform},
+                             {"crs", grid.crsName},
+                             {"epsg", grid.epsg},
+                             {"units", grid.units},
+                             {"cells_with_height", result.input.numValid},
+                             {"nodata_cells",
+                              std::size_t(grid.width) * std::size_t(grid.height) - result.input.numValid},
+                             {"bands", result.bands},
+                             {"values", result.scaled16 ? "uint16, scale 1/65534 (1.5e-5), nodata 65535"
+                                                        : "float32, nodata NaN"},
+                             {"windows", {{"per_row", result.windowsPerRow}, {"per_column", result.windowsPerColumn},
+                                          {"cells", result.windowCells}, {"halo_cells", result.haloCells},
+                                          {"narrow_halo_cells", result.narrowHaloCells},
+                                          {"windows_with_wide_halo", result.wideHaloWindows},
+                                          {"windows_split_for_surface", result.splitWindows}}}};
+    if (options.region.cols > 0)
+        raster["tile_of_mosaic"] = {{"tile", args.tileOfMosaic},
+                                    {"col", options.region.col},
+                                    {"row", options.region.row},
+                                    {"cols", options.region.cols},
+                                    {"rows", options.region.rows}};
+    return raster;
+}
+
+/// The JSON record written beside the output: the input, the parameters, the raster, the
+/// route taken, the surface, the diagnostics and the stages' times.
+nlohmann::json demRunRecord(const ComputeArgs& args, const std::string& input, const std::string& output,
+                            const DemComputeOptions& options, const DemComputeResult& result, const Stopwatch& total)
+{
     nlohmann::json j;
     j["program"] = "msii";
     j["version"] = versionString();
@@ -136,27 +176,7 @@ OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, c
     std::vector<std::string> computed;  // of those asked, the ones the bands need
     for (const Invariant i : result.computed) computed.push_back(std::string(1, invariantLetter(i)));
     j["parameters"]["invariants_computed"] = computed;
-    j["raster"] = {{"width", grid.width},
-                   {"height", grid.height},
-                   {"geotransform", grid.transform},
-                   {"crs", grid.crsName},
-                   {"epsg", grid.epsg},
-                   {"units", grid.units},
-                   {"cells_with_height", result.input.numValid},
-                   {"nodata_cells", std::size_t(grid.width) * std::size_t(grid.height) - result.input.numValid},
-                   {"bands", result.bands},
-                   {"values", result.scaled16 ? "uint16, scale 1/65534 (1.5e-5), nodata 65535" : "float32, nodata NaN"},
-                   {"windows", {{"per_row", result.windowsPerRow}, {"per_column", result.windowsPerColumn},
-                                {"cells", result.windowCells}, {"halo_cells", result.haloCells},
-                                {"narrow_halo_cells", result.narrowHaloCells},
-                                {"windows_with_wide_halo", result.wideHaloWindows},
-                                {"windows_split_for_surface", result.splitWindows}}}};
-    if (options.region.cols > 0)
-        j["raster"]["tile_of_mosaic"] = {{"tile", args.tileOfMosaic},
-                                         {"col", options.region.col},
-                                         {"row", options.region.row},
-                                         {"cols", options.region.cols},
-                                         {"rows", options.region.rows}};
+    j["raster"] = rasterRecord(args, options, result);
     j["engine"] = {{"asked", args.engine},
                    {"used", result.engine == DemEngine::HeightField ? "heights" : "mesh"},
                    {"note", result.engineNote}};
@@ -177,16 +197,61 @@ OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, c
                             {"patch_line_check", t.patchLineCheck}, {"patch_line_exact", t.patchLineExact},
                             {"write", result.writeSeconds}, {"total", total.seconds()}};
     if (t.patchLinePairs > 0) j["patch_line"] = patchLineRecord(t);
+    return j;
+}
+
+/// The line on stderr that says what was written: the grid, the cells with heights, the
+/// bands and the windows.
+void printSummary(const std::string& input, const std::string& output, const DemComputeResult& result,
+                  const Stopwatch& total)
+{
+    const RasterGeoreference& grid = result.input.georeference;
+    const int windows = result.windowsPerRow * result.windowsPerColumn;
+    const std::string split = result.splitWindows > 0 ? ", " + std::to_string(result.splitWindows) +
+                                                            " split further for their spikes' surface"
+                                                      : "";
+    std::fprintf(stderr, "msii: %s -> %s (%d x %d cells, %zu with heights, %zu bands, %d window%s%s%s, %.1f s)\n",
+                 input.c_str(), output.c_str(), grid.width, grid.height, result.input.numValid, result.bands.size(),
+                 windows, windows == 1 ? "" : "s", split.c_str(), exactShareText(result.cost).c_str(), total.seconds());
+}
+
+} // namespace
+
+OneResult computeRasterOne(const ComputeArgs& given, const std::string& input, const std::string& output)
+{
+    ComputeArgs args = given;
+    args.scales = demScales(given, input);
+    const Stopwatch total;
+    refuseMeshOptions(args);
+    DemComputeOptions options;
+    options.compute = computeOptionsOf(args);
+    parseBands(args, options);
+    const std::string sidecar = sidecarPathFor(output);
+    checkOutputs({output, sidecar}, args.overwrite);
+    options.band = args.band;
+    options.windowCells = args.windowCells;
+    options.float32 = args.float32;
+    options.engine = args.engine == "mesh" ? DemEngine::Mesh : DemEngine::HeightField;
+    if (!args.tileOfMosaic.empty()) options.region = regionOfPart(input, args.tileOfMosaic);
+    const std::string description = rasterDescription(args, input);
+    options.output.description = description;
+    options.output.metadata = rasterMetadata(args, input, output);
+
+    // A .ply name: the DEM's mesh with the bands as vertex properties (as msii metric writes
+    // one), through a GeoTIFF beside it that is removed once the PLY is written.
+    const bool ply = fs::path(output).extension() == ".ply";
+    const std::string rasterOutput = ply ? output + ".part.tif" : output;
+    const RemoveOnExit removeRaster{ply ? rasterOutput : std::string()};
+    TerminalProgress terminal(progressStyle(args));
+    RunContext progress(terminal.listener());
+    const DemComputeResult result = computeDemWorded(input, rasterOutput, options, progress);
+    if (ply) writeRasterPly(args, rasterOutput, output, description);
+    if (!args.quiet)
+        for (const Diagnostic& d : result.diagnostics)
+            std::fprintf(stderr, "msii: warning: %s: %s\n", input.c_str(), printableLine(worded(d)).c_str());
+    const nlohmann::json j = demRunRecord(args, input, output, options, result, total);
     writeTextFileAtomic(sidecar, j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
-    if (!args.quiet) {
-        const int windows = result.windowsPerRow * result.windowsPerColumn;
-        const std::string split = result.splitWindows > 0 ? ", " + std::to_string(result.splitWindows) +
-                                                                " split further for their spikes' surface"
-                                                          : "";
-        std::fprintf(stderr, "msii: %s -> %s (%d x %d cells, %zu with heights, %zu bands, %d window%s%s%s, %.1f s)\n",
-                     input.c_str(), output.c_str(), grid.width, grid.height, result.input.numValid, result.bands.size(),
-                     windows, windows == 1 ? "" : "s", split.c_str(), exactShareText(t).c_str(), total.seconds());
-    }
+    if (!args.quiet) printSummary(input, output, result, total);
     return {result.input.numValid, result.plan.voxelSize, total.seconds()};
 }
 
