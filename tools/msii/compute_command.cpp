@@ -479,6 +479,148 @@ void addTerrainOptions(CLI::App& cmd, ComputeArgs& args)
         ->group("Terrain (DEM rasters)");
 }
 
+/// The inputs, the radii and where the outputs go, and the tiles the work is split into (the
+/// first options of msii compute --help).
+void addInputOptions(CLI::App* cmd, ComputeArgs& args)
+{
+    cmd->add_option("inputs", args.inputs,
+                    "Mesh files (PLY, OBJ, OFF, STL), DEM rasters (GeoTIFF, VRT mosaic, ESRI ASCII grid, "
+                    "any GDAL raster) or folders of meshes; several inputs or a folder "
+                    "make a collection: finished outputs are skipped, failures reported, a manifest "
+                    "written")
+        ->required();
+    cmd->add_option("-r,--radius", args.radius,
+                    "Largest radius R in mesh units (usually mm): about the size of the largest "
+                    "feature to detect. Radii are r_j = j*R/N.");
+    args.scalesOption = cmd->add_option("-n,--scales", args.scales,
+                                        "Number of radii N (default 16; for DEMs R / cell size, 4 to 16, so that "
+                                        "the smallest radius is at least a cell)");
+    cmd->add_option("-o,--output", args.output, "Output PLY (one input only)");
+    cmd->add_option("--manifest", args.manifest,
+                    "Collections: JSON-lines record of each input (appended; default "
+                    "<output folder>/msii-manifest.jsonl)");
+    cmd->add_flag("--recursive", args.recursive, "Folders: include their subfolders");
+    cmd->add_option("--memory-budget", args.memoryBudget,
+                    "Compute in spatial tiles sized to fit this memory (e.g. 8G); results equal the "
+                    "untiled run");
+    cmd->add_option("--tiles", args.tiles, "Tiles per axis (instead of sizing them from --memory-budget)");
+    cmd->add_option("--tile", args.tile,
+                    "With --tiles K: compute only tile I (0 to K*K-1), e.g. one cluster job per tile; "
+                    "msii merge joins the parts");
+}
+
+/// The grids the invariants are computed on: the finest voxel and the cells per radius.
+void addPrecisionOptions(CLI::App* cmd, ComputeArgs& args)
+{
+    cmd->add_option("--voxel-size", args.voxelSize,
+                    "Finest voxel edge in mesh units (default: automatic, see README)");
+    cmd->add_option("--precision", args.precision,
+                    "Voxels per radius on the grid each radius is computed on (default 6; "
+                    "higher = more exact and slower)");
+    cmd->add_option("--pl-precision", args.plPrecision,
+                    "Cells per radius for P and L alone (default: 4/3 of --precision, i.e. 8; their "
+                    "kernels blur sharp edges over about a cell, so higher is more exact at sharp edges, "
+                    "and slower)")
+        // Given, it must be a precision: 0 (the engine's default) is not one.
+        ->check(numberCheck([](double v) { return v >= 1 && v <= 64; },
+                            "the P and L precision must be between 1 and 64 cells per radius"));
+    cmd->add_option("--pl-check", args.plCheck,
+                    "on (default): P and L are also summed with kernels 1.5 times narrower, and where the two "
+                    "disagree (a sphere meeting a thin part, a fold or a crease) evaluated exactly from the "
+                    "triangles, so that every value is within the bounds of docs/accuracy.md; off: the kernel "
+                    "sums alone, faster on scans with many thin parts")
+        ->check(CLI::IsMember({"on", "off"}));
+}
+
+/// What the surface is taken as: its units, its repair, its holes and borders, and for a
+/// DEM the route (level set or height field).
+void addSurfaceOptions(CLI::App* cmd, ComputeArgs& args)
+{
+    cmd->add_option("--units", args.units,
+                    "Units of the mesh's coordinates, e.g. mm or m, recorded in the outputs so that pictures' scale "
+                    "bars say them (default: unstated, shown as mm; rasters state theirs)");
+    cmd->add_flag("--strict", args.strict,
+                  "Refuse meshes that need repair (duplicate or degenerate faces, non-manifold edges or "
+                  "vertices, vertices at the same position, inconsistent orientation) instead of repairing them");
+    cmd->add_flag("--repair", args.repair, "Repair is the default now; accepted for old scripts")->group("");
+    cmd->add_option("--fill-holes", args.fillHoles,
+                    "Fill holes whose border is at most SIZE long (mesh units), for the computation only; "
+                    "default pi*R (holes up to about R across); 0 fills none")
+        ->type_name("SIZE")
+        ->check(numberCheck([](double v) { return v >= 0 && std::isfinite(v); },
+                            "the hole size must be 0 (fill none) or a positive length"));
+    cmd->add_option("--border", args.border,
+                    "Where a ball reaches a border of an open surface (a scan's rim, a DEM's edge, a gap too large "
+                    "to fill): continue (default) continues the surface past it, so every vertex and cell gets "
+                    "values, and filled_share says how much of the ball rests on the continuation; mask gives NaN "
+                    "there")
+        ->type_name("continue|mask")
+        ->check(CLI::IsMember({"continue", "mask"}));
+    cmd->add_option("--engine", args.engine,
+                    "For a DEM: heights (default) computes V and S straight from the height field, without a "
+                    "level set; mesh computes them on the DEM's mesh through the level set, as for scans. P and L "
+                    "always take the mesh (the record says so). Meshes, terrain given as a PLY included, always "
+                    "take the level set")
+        ->type_name("heights|mesh")
+        ->check(CLI::IsMember({"heights", "mesh"}));
+}
+
+/// Which invariants, and the exact mode's vertices and GigaMesh's files.
+void addInvariantOptions(CLI::App* cmd, ComputeArgs& args)
+{
+    cmd->add_option("--invariants", args.invariants,
+                    "Which invariants: letters of V, S, P and L, together or comma-separated (default V,S,P,L; "
+                    "VS and v,s are alike)");
+    cmd->add_flag("--no-sphere", args.noSphere, "Leave out S (same as omitting it from --invariants)");
+    cmd->add_flag("--exact", args.exact,
+                  "Exact reference mode: from the triangles themselves, no voxels or samples "
+                  "(slow; restrict it with --vertices or --random-vertices)");
+    cmd->add_option("--vertices", args.vertices,
+                    "With --exact: vertex indices, comma-separated (0-based); others are NaN");
+    cmd->add_option("--random-vertices", args.randomVertices,
+                    "With --exact: this many distinct random vertices (see --seed)");
+    cmd->add_option("--seed", args.seed, "Seed for --random-vertices (default 1)");
+    cmd->add_flag("--gigamesh", args.gigamesh,
+                  "Also write GigaMesh-compatible files next to the output: "
+                  "<name>_r<R>_n<log2 N>_v<precision>.volume.mat (2V/|B|-1) and .surface.mat "
+                  "(P), radii largest first, and <name>.gigamesh.ply with a feature_vector list");
+}
+
+/// msii compute as parsed: the radius checked, one input to its output or a collection.
+int runCompute(const ComputeArgs& args)
+{
+    if (!(args.radius > 0)) {
+        if (args.radius != 0 || !std::isfinite(args.radius))
+            throw InvalidInputError("the radius must be a positive number");
+        throw InvalidInputError("--radius is required" + radiusHint(args.inputs.front()));
+    }
+    const auto limit = limitThreads(args.threads);
+    bool collection = false;
+    const std::vector<std::string> inputs = expandInputs(args, collection);
+    if (!args.output.empty() && inputs.size() > 1)
+        throw InvalidInputError("--output takes one input; use --output-dir for several");
+    if (!args.outputDir.empty()) {
+        std::error_code ec;
+        fs::create_directories(args.outputDir, ec);
+        if (ec) throw IOError("cannot create the output folder " + args.outputDir + ": " + ec.message());
+    }
+    if (!collection) {
+        const std::string output = outputPathFor(args, inputs.front());
+        // The default place, next to the input, may be a data folder the user cannot
+        // write to (a read-only share, a DVD): say where else the output can go.
+        if (args.output.empty() && args.outputDir.empty() && args.rasterOutput.empty()) {
+            try {
+                checkWritable(output);
+            } catch (const IOError& e) {
+                throw IOError(std::string(e.what()) + " Write it elsewhere with -o FILE or --output-dir FOLDER.");
+            }
+        }
+        computeOne(args, inputs.front(), output);
+        return 0;
+    }
+    return computeCollection(args, inputs);
+}
+
 } // namespace
 
 std::function<int()> addComputeCommand(CLI::App& app)
@@ -489,129 +631,17 @@ std::function<int()> addComputeCommand(CLI::App& app)
                    "area) and L (line length) at N radii for every vertex of a mesh, or every cell of a "
                    "DEM raster; writes a PLY with V_01..V_NN, S_.., P_.., L_.. and quality (a GeoTIFF "
                    "on the DEM's grid for rasters), and a JSON record next to it.");
-    cmd->add_option("inputs", args->inputs,
-                    "Mesh files (PLY, OBJ, OFF, STL), DEM rasters (GeoTIFF, VRT mosaic, ESRI ASCII grid, "
-                    "any GDAL raster) or folders of meshes; several inputs or a folder "
-                    "make a collection: finished outputs are skipped, failures reported, a manifest "
-                    "written")
-        ->required();
-    cmd->add_option("-r,--radius", args->radius,
-                    "Largest radius R in mesh units (usually mm): about the size of the largest "
-                    "feature to detect. Radii are r_j = j*R/N.");
-    args->scalesOption = cmd->add_option("-n,--scales", args->scales,
-                                         "Number of radii N (default 16; for DEMs R / cell size, 4 to 16, so that "
-                                         "the smallest radius is at least a cell)");
-    cmd->add_option("-o,--output", args->output, "Output PLY (one input only)");
-    cmd->add_option("--manifest", args->manifest,
-                    "Collections: JSON-lines record of each input (appended; default "
-                    "<output folder>/msii-manifest.jsonl)");
-    cmd->add_flag("--recursive", args->recursive, "Folders: include their subfolders");
-    cmd->add_option("--memory-budget", args->memoryBudget,
-                    "Compute in spatial tiles sized to fit this memory (e.g. 8G); results equal the "
-                    "untiled run");
-    cmd->add_option("--tiles", args->tiles, "Tiles per axis (instead of sizing them from --memory-budget)");
-    cmd->add_option("--tile", args->tile,
-                    "With --tiles K: compute only tile I (0 to K*K-1), e.g. one cluster job per tile; "
-                    "msii merge joins the parts");
+    addInputOptions(cmd, *args);
     addTerrainOptions(*cmd, *args);
     cmd->add_option("--output-dir", args->outputDir,
                     "Folder for the outputs <name>.msii.ply (default: next to each input)");
-    cmd->add_option("--voxel-size", args->voxelSize,
-                    "Finest voxel edge in mesh units (default: automatic, see README)");
-    cmd->add_option("--precision", args->precision,
-                    "Voxels per radius on the grid each radius is computed on (default 6; "
-                    "higher = more exact and slower)");
-    cmd->add_option("--pl-precision", args->plPrecision,
-                    "Cells per radius for P and L alone (default: 4/3 of --precision, i.e. 8; their "
-                    "kernels blur sharp edges over about a cell, so higher is more exact at sharp edges, "
-                    "and slower)")
-        // Given, it must be a precision: 0 (the engine's default) is not one.
-        ->check(numberCheck([](double v) { return v >= 1 && v <= 64; },
-                            "the P and L precision must be between 1 and 64 cells per radius"));
-    cmd->add_option("--pl-check", args->plCheck,
-                    "on (default): P and L are also summed with kernels 1.5 times narrower, and where the two "
-                    "disagree (a sphere meeting a thin part, a fold or a crease) evaluated exactly from the "
-                    "triangles, so that every value is within the bounds of docs/accuracy.md; off: the kernel "
-                    "sums alone, faster on scans with many thin parts")
-        ->check(CLI::IsMember({"on", "off"}));
+    addPrecisionOptions(cmd, *args);
     addCommonOptions(cmd, *args);
     addPropertyNamesOption(cmd, args->propertyPrefix);
-    cmd->add_option("--units", args->units,
-                    "Units of the mesh's coordinates, e.g. mm or m, recorded in the outputs so that pictures' scale "
-                    "bars say them (default: unstated, shown as mm; rasters state theirs)");
-    cmd->add_flag("--strict", args->strict,
-                  "Refuse meshes that need repair (duplicate or degenerate faces, non-manifold edges or "
-                  "vertices, vertices at the same position, inconsistent orientation) instead of repairing them");
-    cmd->add_flag("--repair", args->repair, "Repair is the default now; accepted for old scripts")->group("");
-    cmd->add_option("--fill-holes", args->fillHoles,
-                    "Fill holes whose border is at most SIZE long (mesh units), for the computation only; "
-                    "default pi*R (holes up to about R across); 0 fills none")
-        ->type_name("SIZE")
-        ->check(numberCheck([](double v) { return v >= 0 && std::isfinite(v); },
-                            "the hole size must be 0 (fill none) or a positive length"));
-    cmd->add_option("--border", args->border,
-                    "Where a ball reaches a border of an open surface (a scan's rim, a DEM's edge, a gap too large "
-                    "to fill): continue (default) continues the surface past it, so every vertex and cell gets "
-                    "values, and filled_share says how much of the ball rests on the continuation; mask gives NaN "
-                    "there")
-        ->type_name("continue|mask")
-        ->check(CLI::IsMember({"continue", "mask"}));
-    cmd->add_option("--engine", args->engine,
-                    "For a DEM: heights (default) computes V and S straight from the height field, without a "
-                    "level set; mesh computes them on the DEM's mesh through the level set, as for scans. P and L "
-                    "always take the mesh (the record says so). Meshes, terrain given as a PLY included, always "
-                    "take the level set")
-        ->type_name("heights|mesh")
-        ->check(CLI::IsMember({"heights", "mesh"}));
-    cmd->add_option("--invariants", args->invariants,
-                    "Which invariants: letters of V, S, P and L, together or comma-separated (default V,S,P,L; "
-                    "VS and v,s are alike)");
-    cmd->add_flag("--no-sphere", args->noSphere, "Leave out S (same as omitting it from --invariants)");
-    cmd->add_flag("--exact", args->exact,
-                  "Exact reference mode: from the triangles themselves, no voxels or samples "
-                  "(slow; restrict it with --vertices or --random-vertices)");
-    cmd->add_option("--vertices", args->vertices,
-                    "With --exact: vertex indices, comma-separated (0-based); others are NaN");
-    cmd->add_option("--random-vertices", args->randomVertices,
-                    "With --exact: this many distinct random vertices (see --seed)");
-    cmd->add_option("--seed", args->seed, "Seed for --random-vertices (default 1)");
-    cmd->add_flag("--gigamesh", args->gigamesh,
-                  "Also write GigaMesh-compatible files next to the output: "
-                  "<name>_r<R>_n<log2 N>_v<precision>.volume.mat (2V/|B|-1) and .surface.mat "
-                  "(P), radii largest first, and <name>.gigamesh.ply with a feature_vector list");
+    addSurfaceOptions(cmd, *args);
+    addInvariantOptions(cmd, *args);
 
-    return [args]() {
-        if (!(args->radius > 0)) {
-            if (args->radius != 0 || !std::isfinite(args->radius))
-                throw InvalidInputError("the radius must be a positive number");
-            throw InvalidInputError("--radius is required" + radiusHint(args->inputs.front()));
-        }
-        const auto limit = limitThreads(args->threads);
-        bool collection = false;
-        const std::vector<std::string> inputs = expandInputs(*args, collection);
-        if (!args->output.empty() && inputs.size() > 1)
-            throw InvalidInputError("--output takes one input; use --output-dir for several");
-        if (!args->outputDir.empty()) {
-            std::error_code ec;
-            fs::create_directories(args->outputDir, ec);
-            if (ec) throw IOError("cannot create the output folder " + args->outputDir + ": " + ec.message());
-        }
-        if (!collection) {
-            const std::string output = outputPathFor(*args, inputs.front());
-            // The default place, next to the input, may be a data folder the user cannot
-            // write to (a read-only share, a DVD): say where else the output can go.
-            if (args->output.empty() && args->outputDir.empty() && args->rasterOutput.empty()) {
-                try {
-                    checkWritable(output);
-                } catch (const IOError& e) {
-                    throw IOError(std::string(e.what()) + " Write it elsewhere with -o FILE or --output-dir FOLDER.");
-                }
-            }
-            computeOne(*args, inputs.front(), output);
-            return 0;
-        }
-        return computeCollection(*args, inputs);
-    };
+    return [args]() { return runCompute(*args); };
 }
 
 } // namespace msii::tools
