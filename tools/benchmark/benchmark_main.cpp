@@ -28,11 +28,10 @@ std::string todayUtc()
     return text;
 }
 
-/// docs/performance.md: what is measured, the command that measures it again, the machine
-/// and build, and the tables; generated whole, so that the page cannot drift from the program.
-std::string performancePage(const std::string& command, const std::string& header, const std::string& tables)
+/// The page's head: what is measured and its targets, and the start of the command's block.
+const char* pageIntro()
 {
-    std::string page = R"(# Performance
+    return R"(# Performance
 
 <!-- Written by msii-benchmark --markdown; do not edit by hand: run the command below. -->
 
@@ -44,8 +43,12 @@ windows: 20 minutes (1,200 s) and 4 GB for 100M cells.
 
 ```bash
 )";
-    page += command + "\n```\n\n" + header + "\n" + tables;
-    page += R"(
+}
+
+/// What each row of the tables measures, and how.
+const char* rowsExplained()
+{
+    return R"(
 What the rows are:
 - **total wall, read to write**: reading the PLY, preparing the mesh (checks, repair, hole
   filling), the computation and writing the result, as `msii compute` does them.
@@ -87,7 +90,13 @@ What the rows are:
   sky-view factor and openness once more as a user runs them: a process of its own that
   imports RVT_py, reads the DEM and writes both GeoTIFFs (`save_sky_view_factor`)
   ([terrain.md](terrain.md#large-areas)).
+)";
+}
 
+/// Where the time goes now, stage by stage, and what would make each faster.
+const char* speedLimits()
+{
+    return R"(
 What limits the speed now, and the next steps:
 - **P and L's exact sums** (the check's flagged pairs, evaluated from the triangles) are the
   largest stage on the slabs, and with the kernel sums they take most of the time of all four
@@ -146,12 +155,29 @@ What limits the speed now, and the next steps:
   together), and writing the Cloud-Optimized GeoTIFF (0.055 s, ZSTD at level 1 hardly
   faster), which RVT_py's function's time does not include (its whole process: 0.66 s;
   [terrain.md](terrain.md#large-areas)).
+)";
+}
 
+/// How far this machine's timings can be trusted, and where the accuracy is.
+const char* timingNote()
+{
+    return R"(
 This machine's timings vary from one sitting to the next, by 15–20 % within a day and by up
 to 2× between days, also in stages whose code did not change: compare builds in alternating
 runs. The accuracy of the same settings is in [accuracy.md](accuracy.md); P and L use
 8 cells per radius by default (`--pl-precision 6` is less exact at sharp edges, and no faster).
 )";
+}
+
+/// docs/performance.md: what is measured, the command that measures it again, the machine
+/// and build, and the tables; generated whole, so that the page cannot drift from the program.
+std::string performancePage(const std::string& command, const std::string& header, const std::string& tables)
+{
+    std::string page = pageIntro();
+    page += command + "\n```\n\n" + header + "\n" + tables;
+    page += rowsExplained();
+    page += speedLimits();
+    page += timingNote();
     return page;
 }
 
