@@ -29,6 +29,12 @@ msii="$build_dir/tools/msii"
 "$msii" render "$out/tablet.segments.ply" --show label --colormap viridis --range 0,30 --shade --pixels 800 --overwrite \
   --output "$out/tablet.segments.png"
 "$msii" outline "$out/tablet.msii.ply" --levels 0.55 --overwrite --output "$out/tablet.outline.svg"
+# A whole tablet (closed, round marks on all six sides): the six views on one sheet at 300 dpi,
+# with its record (docs/figures.md).
+"$build_dir/samples/msii-samples" rounded-tablet --roughness 0.004 --output "$out/whole.ply" -q
+"$msii" compute "$out/whole.ply" --radius 1.5 --invariants V --overwrite --output "$out/whole.msii.ply"
+"$msii" render "$out/whole.msii.ply" --layout fat-cross --dpi 300 --shade --isolines 4 --labels --overwrite \
+  --output "$out/whole.sheet.png"
 # Terrain: a generated DEM (GeoTIFF, UTM 32N, 0.5 m cells, small nodata patches) to a
 # georeferenced GeoTIFF of features, and its picture (docs/terrain.md).
 "$build_dir/samples/msii-samples" terrain --geotiff --width 200 --height 150 --spacing 0.5 --relief 3 \
@@ -39,4 +45,5 @@ echo "msii demo: results in $out:"
 echo "  tablet.msii.ply (V_01..V_16, S_01..S_16, P_01..P_16, L_01..L_16, quality, valid_radii, filled_share),"
 echo "  tablet.msii.json,"
 echo "  tablet.map.exr (feature map), tablet.*.png (pictures), tablet.segments.ply/.csv, tablet.outline.svg,"
+echo "  whole.sheet.png and whole.sheet.json (a whole tablet's six views on one sheet),"
 echo "  dem.tif (a generated DEM) and dem.msii.tif (its features as a GeoTIFF for QGIS), dem.quality.png"

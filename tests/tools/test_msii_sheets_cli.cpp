@@ -382,9 +382,9 @@ TEST(MsiiSheetsCli, TheRecordRedoesTheSheetAndViewsComeSeparately)
 {
     const fs::path first = tempDir() / "first.png", again = tempDir() / "again.png";
     RunResult r = runMsii("render " + quoted(tabletFeatures()) +
-                          " --layout fat-cross --labels --shade --dpi 150 --views-separately -q -o " + quoted(first));
+                          " --layout fat-cross --labels --shade --isolines 4 --dpi 250 --views-separately -q -o " + quoted(first));
     ASSERT_EQ(r.code, 0) << r.err;
-    r = runMsii("render " + quoted(tabletFeatures()) + " --layout fat-cross --labels --shade -q --orientation " +
+    r = runMsii("render " + quoted(tabletFeatures()) + " --layout fat-cross --labels --shade --isolines 4 -q --orientation " +
                 quoted(tempDir() / "first.json") + " -o " + quoted(again));
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_EQ(readFile(first.string()), readFile(again.string()));
