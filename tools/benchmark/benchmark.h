@@ -203,7 +203,6 @@ struct MapRuns {
 /// One view's picture and the sheet of the same input at the same pixel size, in turn.
 struct SheetPair {
     std::vector<double> view, sheet;
-    double viewPeak = 0, sheetPeak = 0;
     bool ok = true;
 };
 struct SheetRuns {

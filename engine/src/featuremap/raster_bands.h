@@ -39,6 +39,16 @@ inline BandRange bandsOfBox(double xMin, double xMax, double yMin, double yMax, 
     return {std::uint16_t(lo / kBandRows), std::uint16_t(hi / kBandRows)};
 }
 
+/// As bandsOfBox, for a box found another way than from the projected corners (products
+/// instead of quotients): a millionth of a pixel wider on each side, so that rounding never
+/// leaves out a band the corners' box reaches (a band too many is harmless: drawBands clips
+/// each triangle to its own box).
+inline BandRange bandsOfWiderBox(double xMin, double xMax, double yMin, double yMax, int width, int height)
+{
+    constexpr double kSlack = 1e-6;
+    return bandsOfBox(xMin - kSlack, xMax + kSlack, yMin - kSlack, yMax + kSlack, width, height);
+}
+
 /// Per band, the triangles that may cover one of its pixel centres, in index order (so that
 /// ties in height go to the lower index).
 struct Bands {
@@ -55,14 +65,15 @@ std::array<Bands, K> listBands(std::size_t numTriangles, const std::array<int, K
 {
     constexpr std::size_t kChunk = 1 << 15;
     const std::size_t numChunks = (numTriangles + kChunk - 1) / kChunk;
-    std::array<std::vector<std::size_t>, K> counts;  // per picture: per chunk, per band
+    std::vector<std::array<BandRange, K>> ranges(numTriangles);  // found once, for both passes
+    std::array<std::vector<std::size_t>, K> counts;                // per picture: per chunk, per band
     for (std::size_t v = 0; v < K; ++v) counts[v].assign(numChunks * std::size_t(numBands[v]), 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, numChunks), [&](const auto& r) {
         for (std::size_t c = r.begin(); c < r.end(); ++c)
             for (std::size_t t = c * kChunk; t < std::min(numTriangles, (c + 1) * kChunk); ++t) {
-                const std::array<BandRange, K> ranges = rangesOf(t);
+                ranges[t] = rangesOf(t);
                 for (std::size_t v = 0; v < K; ++v)
-                    for (int b = ranges[v][0]; b <= ranges[v][1]; ++b)
+                    for (int b = ranges[t][v][0]; b <= ranges[t][v][1]; ++b)
                         ++counts[v][c * std::size_t(numBands[v]) + std::size_t(b)];
             }
     });
@@ -83,13 +94,11 @@ std::array<Bands, K> listBands(std::size_t numTriangles, const std::array<int, K
     }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, numChunks), [&](const auto& r) {
         for (std::size_t c = r.begin(); c < r.end(); ++c)
-            for (std::size_t t = c * kChunk; t < std::min(numTriangles, (c + 1) * kChunk); ++t) {
-                const std::array<BandRange, K> ranges = rangesOf(t);
+            for (std::size_t t = c * kChunk; t < std::min(numTriangles, (c + 1) * kChunk); ++t)
                 for (std::size_t v = 0; v < K; ++v)
-                    for (int b = ranges[v][0]; b <= ranges[v][1]; ++b)
+                    for (int b = ranges[t][v][0]; b <= ranges[t][v][1]; ++b)
                         lists[v].triangles[counts[v][c * std::size_t(numBands[v]) + std::size_t(b)]++] =
                             std::uint32_t(t);
-            }
     });
     return lists;
 }

@@ -102,9 +102,13 @@ ViewHits rasterizeViews(const TriMesh& mesh, const FatCrossLayout& layout, RunCo
     });
     std::array<ViewAxes, kSheetViews> va;
     std::array<int, kSheetViews> numBands;
+    std::array<double, kSheetViews> left, top;  // minU and maxV in pixels
+    const double perPixel = 1.0 / layout.pixelSize;
     for (std::size_t v = 0; v < kSheetViews; ++v) {
+        const MapFrame& f = layout.views[v].frame;
         va[v] = viewAxes(layout.views[v], axis);
-        numBands[v] = (layout.views[v].frame.height + kBandRows - 1) / kBandRows;
+        numBands[v] = (f.height + kBandRows - 1) / kBandRows;
+        left[v] = f.minU * perPixel, top[v] = f.maxV * perPixel;
     }
     // The band lists of the six views in one pass over the triangles: each triangle's extent
     // along the three axes gives its box in every view.
@@ -128,8 +132,8 @@ ViewHits rasterizeViews(const TriMesh& mesh, const FatCrossLayout& layout, RunCo
             const double u0 = x.us > 0 ? lo[x.u] : -hi[x.u], u1 = x.us > 0 ? hi[x.u] : -lo[x.u];
             const double v0 = x.vs > 0 ? lo[x.v] : -hi[x.v], v1 = x.vs > 0 ? hi[x.v] : -lo[x.v];
             const MapFrame& f = layout.views[v].frame;
-            ranges[v] = bandsOfBox((u0 - f.minU) / f.pixelSize, (u1 - f.minU) / f.pixelSize,
-                                   (f.maxV - v1) / f.pixelSize, (f.maxV - v0) / f.pixelSize, f.width, f.height);
+            ranges[v] = bandsOfWiderBox(u0 * perPixel - left[v], u1 * perPixel - left[v], top[v] - v1 * perPixel,
+                                        top[v] - v0 * perPixel, f.width, f.height);
         }
         return ranges;
     });
