@@ -37,69 +37,71 @@ Vec3 firstAcross(std::initializer_list<Vec3> candidates, const Vec3& unit)
     return across(*candidates.begin(), unit);
 }
 
-/// Area-weighted third central moment of the surface along @p axis (triangle
-/// centroids), relative to area · σ³: positive where the surface has its longer
-/// tail of area.
-double thirdMoment(const TriMesh& mesh, const SurfaceMoments& m, const Vec3& axis)
+/// What decides the signs, in one pass over the triangles: along the front axis, per side
+/// (by the triangle's centroid) the surface facing along it (within 60°) with its area and the
+/// first and second moments of its height, and the projected area; along each axis, the
+/// second and third central moments of the surface (triangle centroids, area-weighted).
+struct SignMeasures {
+    double projected = 0, area[2] = {0, 0}, sum[2] = {0, 0}, sum2[2] = {0, 0};
+    double m2[2] = {0, 0}, m3[2] = {0, 0};  ///< along the front axis [0] and the up axis [1]
+
+    /// The third moment along axis @p k relative to area · σ³: positive where the surface
+    /// has its longer tail of area.
+    double skew(int k, double totalArea) const
+    {
+        const double sigma = std::sqrt(m2[k] / totalArea);
+        return sigma > 0 ? m3[k] / (totalArea * sigma * sigma * sigma) : 0.0;
+    }
+};
+
+SignMeasures signMeasures(const TriMesh& mesh, const SurfaceMoments& m, const Vec3& frontAxis, const Vec3& upAxis)
 {
-    double m2 = 0, m3 = 0;
+    SignMeasures s;
     for (const Triangle& t : mesh.triangles) {
         const Vec3 &a = mesh.points[t[0]], &b = mesh.points[t[1]], &c = mesh.points[t[2]];
-        const double A = 0.5 * norm(cross(b - a, c - a));
-        const double h = dot((a + b + c) / 3.0 - m.centroid, axis);
-        m2 += A * h * h;
-        m3 += A * h * h * h;
+        const Vec3 n = cross(b - a, c - a) * 0.5, centre = (a + b + c) / 3.0 - m.centroid;
+        const double A = norm(n), along = std::abs(dot(n, frontAxis));
+        const double h[2] = {dot(centre, frontAxis), dot(centre, upAxis)};
+        for (int k = 0; k < 2; ++k) s.m2[k] += A * h[k] * h[k], s.m3[k] += A * h[k] * h[k] * h[k];
+        s.projected += along;
+        if (!(A > 0) || along < 0.5 * A) continue;
+        const int side = h[0] >= 0 ? 0 : 1;
+        s.area[side] += A, s.sum[side] += A * h[0], s.sum2[side] += A * h[0] * h[0];
     }
-    const double sigma = std::sqrt(m2 / m.area);
-    return sigma > 0 ? m3 / (m.area * sigma * sigma * sigma) : 0.0;
+    return s;
 }
 
-/// The sign of the front axis @p axis: the side an open scan faces, else the
-/// flatter of the two large sides, else the third moment's tail (the bulge),
-/// else the sign convention.
-Vec3 frontSide(const TriMesh& mesh, const SurfaceMoments& m, const Vec3& axis, std::string& rule)
+/// The sign of the front axis @p axis: the side an open scan faces, else the flatter of the
+/// two large sides (its height varies less), else the third moment's tail (the bulge goes
+/// to the reverse), else the sign convention.
+Vec3 frontSide(const SignMeasures& s, const SurfaceMoments& m, const Vec3& axis, std::string& rule)
 {
-    // Per side (by the triangle's centroid), the surface facing along the axis
-    // (within 60°): area, and the first and second moments of its height along
-    // the axis.
-    double projected = 0, area[2] = {0, 0}, sum[2] = {0, 0}, sum2[2] = {0, 0};
-    for (const Triangle& t : mesh.triangles) {
-        const Vec3 &a = mesh.points[t[0]], &b = mesh.points[t[1]], &c = mesh.points[t[2]];
-        const Vec3 n = cross(b - a, c - a) * 0.5;
-        const double A = norm(n), along = std::abs(dot(n, axis));
-        projected += along;
-        if (!(A > 0) || along < 0.5 * A) continue;
-        const double h = dot((a + b + c) / 3.0 - m.centroid, axis);
-        const int s = h >= 0 ? 0 : 1;
-        area[s] += A, sum[s] += A * h, sum2[s] += A * h * h;
-    }
     const double facing = dot(m.vectorArea, axis);
-    if (std::abs(facing) > 0.5 * projected) {
+    if (std::abs(facing) > 0.5 * s.projected) {
         rule = "the scan's side";
         return facing > 0 ? axis : -axis;
     }
-    const auto variance = [&](int s) {
-        return area[s] > 0 ? sum2[s] / area[s] - (sum[s] / area[s]) * (sum[s] / area[s]) : 0.0;
+    const auto variance = [&](int k) {
+        return s.area[k] > 0 ? s.sum2[k] / s.area[k] - (s.sum[k] / s.area[k]) * (s.sum[k] / s.area[k]) : 0.0;
     };
     const double plus = variance(0), minus = variance(1);
     if (std::abs(plus - minus) > kUndecided * std::max(plus, minus)) {
         rule = "the flatter side";
         return plus < minus ? axis : -axis;
     }
-    const double skew = thirdMoment(mesh, m, axis);
+    const double skew = s.skew(0, m.area);
     if (std::abs(skew) > kUndecided) {
         rule = "third moment";
-        return skew < 0 ? axis : -axis;  // the bulge (the tail) goes to the reverse
+        return skew < 0 ? axis : -axis;
     }
     rule = "sign convention";
     return canonicalSign(axis);
 }
 
-/// The sign of the up axis @p axis: towards the third moment's tail, else the
-/// convention.
-Vec3 upSide(const TriMesh& mesh, const SurfaceMoments& m, const Vec3& axis, std::string& rule)
+/// The sign of the up axis @p axis: towards the third moment's tail, else the convention.
+Vec3 upSide(const SignMeasures& s, const SurfaceMoments& m, const Vec3& axis, std::string& rule)
 {
-    const double skew = thirdMoment(mesh, m, axis);
+    const double skew = s.skew(1, m.area);
     if (std::abs(skew) > kUndecided) {
         rule = "third moment";
         return skew > 0 ? axis : -axis;
@@ -128,21 +130,20 @@ SheetOrientation orientSheet(const TriMesh& mesh, const SheetOrientationOptions&
         o.frontRule = o.upRule = "given";
         return o;
     }
+    // The two axes' lines first (a given direction, or the principal axis across it), then
+    // their signs from one pass over the surface.
     const PrincipalAxes p = principalAxes(m.covariance);
-    if (front) {
-        o.front = *front;
-        o.frontRule = "given";
-        o.up = upSide(mesh, m, firstAcross({p.axes[2], p.axes[1]}, o.front), o.upRule);
-        return o;
-    }
-    if (up) {
-        o.up = *up;
-        o.upRule = "given";
-        o.front = frontSide(mesh, m, firstAcross({p.axes[0], p.axes[1]}, o.up), o.frontRule);
-        return o;
-    }
-    o.front = frontSide(mesh, m, normalized(p.axes[0]), o.frontRule);
-    o.up = upSide(mesh, m, across(p.axes[2], o.front), o.upRule);
+    const Vec3 frontAxis = front ? *front : up ? firstAcross({p.axes[0], p.axes[1]}, *up) : normalized(p.axes[0]);
+    const Vec3 upAxis = up ? across(*up, frontAxis) : firstAcross({p.axes[2], p.axes[1]}, frontAxis);
+    const SignMeasures s = signMeasures(mesh, m, frontAxis, upAxis);
+    if (front)
+        o.front = *front, o.frontRule = "given";
+    else
+        o.front = frontSide(s, m, frontAxis, o.frontRule);
+    if (up)
+        o.up = *up, o.upRule = "given";
+    else
+        o.up = upSide(s, m, upAxis, o.upRule);
     return o;
 }
 
