@@ -22,7 +22,7 @@ touch "${10}"
 SH
 chmod +x "$work"/gigamesh-*
 out=$("$benchmark" --spacing 0.15 --runs 1 --tiles 0 --map-pixels 0 --exact-vertices 0 --exact-slab false \
-  --processes false --before "$msii" --gigamesh "$work")
+  --processes false --sheets false --vessels false --before "$msii" --gigamesh "$work")
 echo "$out"
 grep -q "scan-like slab, .* vertices, R = .* (25 median edges), N = 16, 1 thread;" <<<"$out"
 grep -q "scan-like slab, .* vertices, R = .*, 2 threads;" <<<"$out"

@@ -3,6 +3,8 @@
 /// programs' options, child processes with their peak memory, and the tables' rows.
 #include "benchmark.h"
 
+#include <fstream>
+
 #include <msii/core/stopwatch.h>
 
 #include <fcntl.h>
@@ -58,6 +60,19 @@ void row(Report& report, const char* name, double value, const char* format)
     report.print("| %-62s | ", name);
     report.print(format, value);
     report.print(" |\n");
+}
+
+} // namespace msii::benchmark
+
+namespace msii::benchmark {
+
+std::size_t readVertexCount(const std::string& ply)
+{
+    std::ifstream in(ply, std::ios::binary);
+    std::string line;
+    while (std::getline(in, line) && line != "end_header")
+        if (line.rfind("element vertex ", 0) == 0) return std::size_t(std::stoull(line.substr(15)));
+    return 0;
 }
 
 } // namespace msii::benchmark

@@ -3,6 +3,7 @@
 /// work folder, the report that is printed and kept for the performance page, a few helpers,
 /// and each case's entry points. Each case has a file of its own, named after it:
 /// tablet_case.cpp, processes_case.cpp, exact_case.cpp, metrics_case.cpp, maps_case.cpp, sheets_case.cpp,
+/// vessels_case.cpp,
 /// large_terrain_case.cpp, dem_case.cpp and terrain_peer_case.cpp; benchmark_main.cpp runs
 /// them in order and writes the page.
 #pragma once
@@ -16,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cstdarg>
 #include <cstddef>
 #include <cstdio>
@@ -77,6 +79,8 @@ struct Settings {
     bool scans = true;         ///< the scans case: scan-like slabs of ~38k and ~300k vertices, and the tablet
     bool sheets = true;        ///< the sheets case: the fat cross beside one view, on the tablet and a closed tablet
     double sheetDpi = 600;     ///< the sheets case's scale
+    bool vessels = true;       ///< the vessels case: msii axis, profile and unroll on a vase of ~1M vertices
+    double vesselSpacing = 0.17;  ///< its spacing, mm
     std::string before;        ///< an earlier msii program, run beside --msii on the scans case
     std::string gigamesh;      ///< a folder holding GigaMesh's gigamesh-featurevectors and -sl
     std::string markdown;
@@ -218,6 +222,24 @@ SheetRuns timeSheets(const Bench& bench, std::size_t tabletVertices);
 /// The rows of the tablet's table for the sheets' runs.
 void printSheetRows(Report& report, const Settings& s, const SheetRuns& r, std::size_t tabletVertices);
 
+// Vessels: axis, profile and rollout (vessels_case.cpp).
+
+struct VesselRuns {
+    std::array<std::vector<double>, 3> seconds;  ///< msii axis, profile, unroll
+    std::size_t vertices = 0;
+    bool ok = true;
+};
+
+/// `msii axis`, `msii profile` and `msii unroll` on a generated vase, each in a process of its
+/// own, run after run.
+VesselRuns timeVessels(const Bench& bench);
+
+/// The rows of the tablet's table for the vessels' runs.
+void printVesselRows(Report& report, const VesselRuns& r);
+
+/// The vertex count a PLY's header states (0 if it cannot be read).
+std::size_t readVertexCount(const std::string& ply);
+
 /// The EXR feature map (every feature and quality; default PIZ float, and the variants) and
 /// a PNG picture, run after run.
 MapRuns timeMapsAndPictures(const Bench& bench, const TriMesh& mesh, const std::vector<VertexProperty>& props,
@@ -239,6 +261,7 @@ struct TabletExtras {
     const MapRuns& maps;
     const ProcessRuns& processes;
     const SheetRuns& sheets;
+    const VesselRuns& vessels;
 };
 
 /// The tablet's table: the line that says what was measured, the machine, and the stages.

@@ -230,6 +230,10 @@ void addOptions(CLI::App& app, Settings& s)
                    "each in its own process, on the tablet's results and on a closed tablet of as many vertices "
                    "(default true)");
     app.add_option("--sheet-dpi", s.sheetDpi, "the sheets' scale, dots per inch (default 600)");
+    app.add_option("--vessels", s.vessels,
+                   "also time msii axis, msii profile and msii unroll, each in its own process, on a generated vase "
+                   "of about a million vertices (default true)");
+    app.add_option("--vessel-spacing", s.vesselSpacing, "the vase's vertex spacing, mm (default 0.17: about 1M vertices)");
     app.add_option("--before", s.before,
                    "with the scans: an earlier msii build's program (\"PROGRAM [ARGS...]\"), run in turn with --msii "
                    "on the same inputs, for before/after columns and their ratio")
@@ -314,6 +318,8 @@ int main(int argc, char** argv)
     if (settings.processes) processes = runProcesses(bench, tablet);
     SheetRuns sheets;
     if (settings.sheets) sheets = timeSheets(bench, tablet.nv);
+    VesselRuns vessels;
+    if (settings.vessels) vessels = timeVessels(bench);
     fs::remove_all(dir);
 
     // The exact mode (V, S, P, L from the triangles): on a block of the tablet's vertices,
@@ -332,7 +338,7 @@ int main(int argc, char** argv)
     const MapRuns maps = timeMapsAndPictures(bench, tablet.lastMesh, props, quality);
 
     const TabletExtras extras{generateSeconds, exact, slab.numVertices(), metrics, table.dimension(), props.size(),
-                              maps, processes, sheets};
+                              maps, processes, sheets, vessels};
     printTabletTable(report, settings, tablet, extras);
     std::fflush(stdout);
     if (!scans.cases.empty()) printScanTables(report, settings, scans);

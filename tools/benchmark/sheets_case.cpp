@@ -26,13 +26,13 @@ void timePair(const Settings& s, const std::vector<std::string>& view, const std
 std::vector<std::string> renderArgs(const Settings& s, const std::string& input, const std::string& png,
                                     std::vector<std::string> more)
 {
-    std::vector<std::string> args{s.msiiProgram, "render", input, "--dpi", number(s.sheetDpi), "-q", "--overwrite",
-                                  "-o", png};
+    std::vector<std::string> args{s.msiiProgram, "render",      input, "--dpi", number(s.sheetDpi),
+                                  "-q",          "--overwrite", "-o",  png};
     args.insert(args.end(), more.begin(), more.end());
     return args;
 }
 
-} // namespace
+}  // namespace
 
 SheetRuns timeSheets(const Bench& bench, std::size_t tabletVertices)
 {
@@ -65,4 +65,4 @@ void printSheetRows(Report& report, const Settings& s, const SheetRuns& r, std::
     rows(r.closed, "a closed tablet's relief (~" + std::to_string(r.closedVertices / 1000) + "k)");
 }
 
-} // namespace msii::benchmark
+}  // namespace msii::benchmark

@@ -198,6 +198,7 @@ void printTabletTable(Report& report, const Settings& s, const TabletRuns& t, co
     row(report, "peak memory (MB)", usage.ru_maxrss / 1024.0, "%8.0f");
     printProcessRows(report, x.processes);
     if (s.sheets) printSheetRows(report, s, x.sheets, t.nv);
+    if (s.vessels) printVesselRows(report, x.vessels);
 }
 
 } // namespace msii::benchmark

@@ -64,5 +64,11 @@ std::function<int()> addOutlineCommand(CLI::App& app);
 std::function<int()> addMergeCommand(CLI::App& app);
 /// Adds `msii view` (a web page of the features, served on 127.0.0.1).
 std::function<int()> addViewCommand(CLI::App& app);
+/// Adds `msii axis` (the axis of rotation of a vessel, a sherd or a seal).
+std::function<int()> addAxisCommand(CLI::App& app);
+/// Adds `msii profile` (the section through the axis, or any plane: SVG and CSV).
+std::function<int()> addProfileCommand(CLI::App& app);
+/// Adds `msii unroll` (the surface laid onto the plane around its axis).
+std::function<int()> addUnrollCommand(CLI::App& app);
 
 } // namespace msii::tools

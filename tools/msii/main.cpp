@@ -38,6 +38,9 @@ int main(int argc, char** argv)
     auto runOutline = msii::tools::addOutlineCommand(app);
     auto runMerge = msii::tools::addMergeCommand(app);
     auto runView = msii::tools::addViewCommand(app);
+    auto runAxis = msii::tools::addAxisCommand(app);
+    auto runProfile = msii::tools::addProfileCommand(app);
+    auto runUnroll = msii::tools::addUnrollCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::Success& e) {  // --help, --help-all, --version
@@ -57,6 +60,9 @@ int main(int argc, char** argv)
         else if (app.got_subcommand("outline")) status = runOutline();
         else if (app.got_subcommand("merge")) status = runMerge();
         else if (app.got_subcommand("view")) status = runView();
+        else if (app.got_subcommand("axis")) status = runAxis();
+        else if (app.got_subcommand("profile")) status = runProfile();
+        else if (app.got_subcommand("unroll")) status = runUnroll();
         // The command's files are written, closed and renamed. What is left at exit is the
         // libraries' teardown (PROJ closing its database, GDAL its drivers, TBB its threads):
         // about 5 ms of a 0.3 s run on a 1000 x 1000 DEM, which the system reclaims anyway.

@@ -63,5 +63,9 @@
 #include <msii/figures/fat_cross.h>
 #include <msii/figures/sheet_orientation.h>
 #include <msii/figures/sheet_raster.h>
+// Vessels: the axis of rotation, the profile and the rollout.
+#include <msii/vessels/axis_of_rotation.h>
+#include <msii/vessels/profile_section.h>
+#include <msii/vessels/unroll.h>
 #include <msii/segmentation/components.h>
 #include <msii/outline/isolines.h>
