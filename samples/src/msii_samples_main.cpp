@@ -1,6 +1,8 @@
 /// @file msii_samples_main.cpp
 /// @brief `msii-samples`: writes the deterministic sample meshes of
-/// msii/samples/generators.h as PLY files (for the demo, the benchmark, and by hand).
+/// msii/samples/generators.h and msii/samples/vessels.h as PLY files (for the demo, the
+/// benchmark, the tests, and by hand); vessels, sherds and seals with their known answers
+/// (--truth FILE.json).
 ///
 ///   msii-samples SHAPE --output FILE.ply [--spacing S] [--seed N] [shape options]
 ///   msii-samples --list
@@ -17,12 +19,14 @@
 #include <msii/io/atomic_file.h>
 #include <msii/io/write_ply.h>
 #include <msii/samples/generators.h>
+#include <msii/samples/vessels.h>
 #include <msii/terrain/raster_output.h>
 
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <cstdint>
 #include <exception>
 #include <iostream>
@@ -39,7 +43,7 @@ struct ShapeInfo {
     const char* description;
 };
 
-constexpr std::array<ShapeInfo, 7> kShapes = {{
+constexpr std::array<ShapeInfo, 10> kShapes = {{
     {"sphere", "closed sphere (jittered geodesic icosphere), vertices exactly on it; --radius, --center"},
     {"cavity", "the sphere with reversed orientation: the solid is outside (a spherical cavity)"},
     {"cube", "closed cube [0, side]^3, irregularly triangulated faces; --side"},
@@ -47,6 +51,9 @@ constexpr std::array<ShapeInfo, 7> kShapes = {{
     {"terrain", "smooth random hills and valleys, amplitude ~ --relief (--closed: a slab)"},
     {"tablet", "curved clay-tablet face with cuneiform wedge impressions (--closed: a slab)"},
     {"rounded-tablet", "a whole tablet, closed: rounded box, bulging reverse, marks on all six sides; --marks-csv"},
+    {"vessel", "a pot, closed: a profile (--profile cylinder|cone|vase) revolved, marks in its wall; --truth"},
+    {"sherd", "a piece of a vessel's wall, jagged breaks (--angle, --from, --to or --rim); --truth"},
+    {"seal", "a cylinder seal, marks engraved in its side; --truth"},
 }};
 
 /// A usage error found after parsing (exit code 2).
@@ -80,12 +87,15 @@ int fail(int code, const std::string& message)
 /// value was given.
 struct Arguments {
     std::string shape, output, centerText, offsetText, crs = "EPSG:25832", marksText, marksCsv;
+    std::string profile = "vase", truth;
     double spacing = 0, radius = 0, side = 0, width = 0, height = 0, thickness = 0, relief = 0, noise = 0;
     double wedgeSize = 0, wedgeDensity = 0, holeSize = 0, wallStep = 0, anisotropy = 1, densityVariation = 1;
     double roughness = 0, hillWidth = 0, rounding = 0, reverseBulge = 0, markRadius = 0, markDepth = 0;
+    double topRadius = 0, wall = 0, base = 0, angle = 0, from = 0, to = 0;
     std::size_t holes = 0;
-    std::uint64_t seed = 1;
+    std::uint64_t seed = 1, poseSeed = 0;
     bool closed = false, cavity = false, ascii = false, doublePoints = false, quiet = false, list = false;
+    bool rim = false;
     bool geotiff = false;
     CLI::Option *optSpacing = nullptr, *optRadius = nullptr, *optCenter = nullptr, *optOffset = nullptr;
     CLI::Option *optCavity = nullptr, *optSide = nullptr, *optWidth = nullptr, *optHeight = nullptr;
@@ -95,7 +105,32 @@ struct Arguments {
     CLI::Option *optGeotiff = nullptr, *optCrs = nullptr;
     CLI::Option *optRounding = nullptr, *optReverseBulge = nullptr, *optMarks = nullptr, *optMarkRadius = nullptr;
     CLI::Option *optMarkDepth = nullptr, *optMarksCsv = nullptr;
+    CLI::Option *optProfile = nullptr, *optTopRadius = nullptr, *optWall = nullptr, *optBase = nullptr;
+    CLI::Option *optAngle = nullptr, *optFrom = nullptr, *optTo = nullptr, *optRim = nullptr;
+    CLI::Option *optPoseSeed = nullptr, *optTruth = nullptr;
 };
+
+/// The options of the vessels, sherds and seals (msii/samples/vessels.h).
+void addVesselOptions(CLI::App& app, Arguments& a, const CLI::Validator& digitsOnly)
+{
+    a.optProfile = app.add_option("--profile", a.profile, "vessel/sherd: the outer wall's shape (default vase)")
+                       ->check(CLI::IsMember({"cylinder", "cone", "vase"}));
+    a.optTopRadius = app.add_option("--top-radius", a.topRadius,
+                                    "vessel/sherd with --profile cone: outer radius at the rim, mm (default 35)");
+    a.optWall = app.add_option("--wall", a.wall, "vessel/sherd: wall thickness, mm (default 5)");
+    a.optBase = app.add_option("--base", a.base, "vessel/sherd: base thickness, mm (default 6)");
+    a.optAngle = app.add_option("--angle", a.angle, "sherd: degrees of the circumference it covers (default 75)");
+    a.optFrom = app.add_option("--from", a.from, "sherd: lowest z of its outer wall, mm (default 40)");
+    a.optTo = app.add_option("--to", a.to, "sherd: highest z of its outer wall, mm (default 80)");
+    a.optRim = app.add_flag("--rim", a.rim, "sherd: the piece reaches the rim (its top is the lip; not with --to)");
+    a.optPoseSeed = app.add_option("--pose-seed", a.poseSeed,
+                                   "vessel/sherd/seal: 0 (default) as built, axis z; otherwise a seeded rotation and "
+                                   "a translation of up to 1000 mm")
+                        ->check(digitsOnly);
+    a.optTruth = app.add_option("--truth", a.truth,
+                                "vessel/sherd/seal: also write the known answers as JSON (axis, rim diameter, "
+                                "height, marks, profiles)");
+}
 
 void addOptions(CLI::App& app, Arguments& a)
 {
@@ -115,7 +150,9 @@ void addOptions(CLI::App& app, Arguments& a)
         },
         "", "UINT");
     app.add_option("--seed", a.seed, "Random seed, 0 .. 2^64-1 (default 1)")->check(digitsOnly);
-    a.optRadius = app.add_option("--radius", a.radius, "sphere/cavity: radius, mm (default 10)");
+    a.optRadius = app.add_option("--radius", a.radius,
+                                 "sphere/cavity: radius, mm (default 10); vessel/sherd: outer radius (the cone's at "
+                                 "the base, the vase's widest; default 50); seal (default 12.5)");
     a.optCenter = app.add_option("--center", a.centerText, "sphere/cavity: centre x,y,z, mm (default 0,0,0)");
     a.optOffset = app.add_option("--offset", a.offsetText,
                                  "Move the mesh by x,y,z: e.g. 500000,5500000,300 puts it in UTM-like "
@@ -125,7 +162,8 @@ void addOptions(CLI::App& app, Arguments& a)
     a.optWidth = app.add_option("--width", a.width,
                                 "plane/terrain/tablet: extent along x, mm (default 20; rounded-tablet 24)");
     a.optHeight = app.add_option("--height", a.height,
-                                 "plane/terrain/tablet: extent along y, mm (default 15; rounded-tablet 32)");
+                                 "plane/terrain/tablet: extent along y, mm (default 15; rounded-tablet 32); "
+                                 "vessel/sherd: base bottom to rim top (default 120); seal (default 35)");
     a.optClosed = app.add_flag("--closed", a.closed, "plane/terrain/tablet: closed slab instead of an open patch");
     a.optThickness = app.add_option("--thickness", a.thickness,
                                     "slab thickness below z = 0, mm (default 5); rounded-tablet: along z (default 10)");
@@ -135,8 +173,11 @@ void addOptions(CLI::App& app, Arguments& a)
     a.optMarks = app.add_option("--marks", a.marksText,
                                 "rounded-tablet: marks on the obverse, reverse, top, bottom, left and right sides "
                                 "(default 6,5,1,2,4,3)");
-    a.optMarkRadius = app.add_option("--mark-radius", a.markRadius, "rounded-tablet: radius of a mark, mm (default 1)");
-    a.optMarkDepth = app.add_option("--mark-depth", a.markDepth, "rounded-tablet: depth of a mark, mm (default 0.4)");
+    a.optMarkRadius = app.add_option("--mark-radius", a.markRadius,
+                                     "rounded-tablet/seal: radius of a mark, mm (default 1); vessel/sherd (default 2)");
+    a.optMarkDepth = app.add_option("--mark-depth", a.markDepth,
+                                    "rounded-tablet/seal: depth of a mark, mm (default 0.4); vessel/sherd (default "
+                                    "0.6); 0: no marks on vessels, sherds and seals");
     a.optMarksCsv = app.add_option("--marks-csv", a.marksCsv,
                                    "rounded-tablet: also write the marks as CSV (side,x,y,z,nx,ny,nz,radius,depth)");
     a.optAnisotropy = app.add_option("--anisotropy", a.anisotropy,
@@ -145,7 +186,7 @@ void addOptions(CLI::App& app, Arguments& a)
                                   "plane/terrain/tablet: densest / sparsest vertex density, varying smoothly (default 1)");
     a.optRoughness = app.add_option("--roughness", a.roughness,
                                     "plane/terrain/tablet: white scanner noise, z moved by up to this, mm (default 0); "
-                                    "rounded-tablet: along the normal");
+                                    "rounded-tablet/vessel/sherd/seal: along the normal");
     a.optWallStep = app.add_option("--wall-step", a.wallStep,
                                    "with --closed: walls and bottom of a few long triangles, bottom outline vertices "
                                    "this far apart, mm (as many meshers make them; default: as fine as the top)");
@@ -166,6 +207,7 @@ void addOptions(CLI::App& app, Arguments& a)
         "--spacing cells, in metres, its corner at --offset x,y (default 512000,5498000, UTM-like) lifted by z "
         "(default 300), in --crs; --holes makes nodata patches up to --hole-size in radius");
     a.optCrs = app.add_option("--crs", a.crs, "With --geotiff: the coordinate system (default EPSG:25832, ETRS89 / UTM 32N)");
+    addVesselOptions(app, a, digitsOnly);
     app.add_flag("--ascii", a.ascii, "Write ascii PLY (default binary little endian)");
     app.add_flag("--double", a.doublePoints, "Write coordinates as double (exact) instead of float");
     app.add_flag("-q,--quiet", a.quiet, "Do not print the summary line");
@@ -176,27 +218,27 @@ void addOptions(CLI::App& app, Arguments& a)
 void checkUsage(const Arguments& a)
 {
     if (a.shape.empty())
-        throw UsageError("a SHAPE is required (one of sphere, cavity, cube, plane, terrain, tablet, rounded-tablet; "
-                         "see --list)");
+        throw UsageError("a SHAPE is required (one of sphere, cavity, cube, plane, terrain, tablet, rounded-tablet, "
+                         "vessel, sherd, seal; see --list)");
     if (a.output.empty()) throw UsageError("--output FILE.ply is required");
     const std::map<const CLI::Option*, std::set<std::string>> applies = {
-        {a.optRadius, {"sphere", "cavity"}},
+        {a.optRadius, {"sphere", "cavity", "vessel", "sherd", "seal"}},
         {a.optCenter, {"sphere", "cavity"}},
         {a.optCavity, {"sphere", "cavity"}},
         {a.optSide, {"cube"}},
         {a.optWidth, {"plane", "terrain", "tablet", "rounded-tablet"}},
-        {a.optHeight, {"plane", "terrain", "tablet", "rounded-tablet"}},
+        {a.optHeight, {"plane", "terrain", "tablet", "rounded-tablet", "vessel", "sherd", "seal"}},
         {a.optClosed, {"plane", "terrain", "tablet"}},
         {a.optThickness, {"plane", "terrain", "tablet", "rounded-tablet"}},
         {a.optWallStep, {"plane", "terrain", "tablet"}},
         {a.optAnisotropy, {"plane", "terrain", "tablet"}},
         {a.optDensity, {"plane", "terrain", "tablet"}},
-        {a.optRoughness, {"plane", "terrain", "tablet", "rounded-tablet"}},
+        {a.optRoughness, {"plane", "terrain", "tablet", "rounded-tablet", "vessel", "sherd", "seal"}},
         {a.optRounding, {"rounded-tablet"}},
         {a.optReverseBulge, {"rounded-tablet"}},
         {a.optMarks, {"rounded-tablet"}},
-        {a.optMarkRadius, {"rounded-tablet"}},
-        {a.optMarkDepth, {"rounded-tablet"}},
+        {a.optMarkRadius, {"rounded-tablet", "vessel", "sherd", "seal"}},
+        {a.optMarkDepth, {"rounded-tablet", "vessel", "sherd", "seal"}},
         {a.optMarksCsv, {"rounded-tablet"}},
         {a.optRelief, {"terrain"}},
         {a.optHillWidth, {"terrain"}},
@@ -204,6 +246,16 @@ void checkUsage(const Arguments& a)
         {a.optWedgeSize, {"tablet"}},
         {a.optWedgeDensity, {"tablet"}},
         {a.optGeotiff, {"plane", "terrain", "tablet"}},
+        {a.optProfile, {"vessel", "sherd"}},
+        {a.optTopRadius, {"vessel", "sherd"}},
+        {a.optWall, {"vessel", "sherd"}},
+        {a.optBase, {"vessel", "sherd"}},
+        {a.optAngle, {"sherd"}},
+        {a.optFrom, {"sherd"}},
+        {a.optTo, {"sherd"}},
+        {a.optRim, {"sherd"}},
+        {a.optPoseSeed, {"vessel", "sherd", "seal"}},
+        {a.optTruth, {"vessel", "sherd", "seal"}},
     };
     for (const auto& [opt, shapes] : applies)
         if (opt->count() > 0 && shapes.count(a.shape) == 0)
@@ -217,6 +269,8 @@ void checkUsage(const Arguments& a)
         throw UsageError("--geotiff writes a regular grid: not with --closed, --ascii, --double, --anisotropy, "
                          "--density-variation or --roughness");
     if (a.optHoleSize->count() > 0 && a.holes == 0) throw UsageError("--hole-size needs --holes");
+    if (a.optTopRadius->count() > 0 && a.profile != "cone") throw UsageError("--top-radius needs --profile cone");
+    if (a.optTo->count() > 0 && a.rim) throw UsageError("--to does not apply with --rim (the piece reaches the rim)");
 }
 
 msii::TriMesh sphereMesh(const Arguments& a, std::ostringstream& comment)
@@ -280,6 +334,106 @@ msii::TriMesh roundedTabletMesh(const Arguments& a, std::ostringstream& comment)
         msii::writeTextFileAtomic(a.marksCsv, csv.str());
     }
     return std::move(tablet.mesh);
+}
+
+/// The vessel of the command line (for a vessel and a sherd).
+msii::samples::VesselOptions vesselOptions(const Arguments& a)
+{
+    using msii::samples::VesselShape;
+    msii::samples::VesselOptions o;
+    o.shape = a.profile == "cylinder" ? VesselShape::Cylinder
+              : a.profile == "cone"   ? VesselShape::Cone
+                                      : VesselShape::Vase;
+    if (a.optHeight->count()) o.height = a.height;
+    if (a.optRadius->count()) o.radius = a.radius;
+    if (a.optTopRadius->count()) o.topRadius = a.topRadius;
+    if (a.optWall->count()) o.wall = a.wall;
+    if (a.optBase->count()) o.base = a.base;
+    if (a.optMarkRadius->count()) o.markRadius = a.markRadius;
+    if (a.optMarkDepth->count()) o.markDepth = a.markDepth;
+    if (a.optSpacing->count()) o.spacing = a.spacing;
+    o.roughness = a.roughness;
+    o.seed = a.seed;
+    o.poseSeed = a.poseSeed;
+    return o;
+}
+
+/// A vessel, sherd or seal with its known answers, said in @p comment.
+msii::samples::Vessel vesselObject(const Arguments& a, std::ostringstream& comment)
+{
+    if (a.shape == "seal") {
+        msii::samples::SealOptions o;
+        if (a.optRadius->count()) o.radius = a.radius;
+        if (a.optHeight->count()) o.height = a.height;
+        if (a.optMarkRadius->count()) o.markRadius = a.markRadius;
+        if (a.optMarkDepth->count()) o.markDepth = a.markDepth;
+        if (a.optSpacing->count()) o.spacing = a.spacing;
+        o.roughness = a.roughness;
+        o.seed = a.seed;
+        o.poseSeed = a.poseSeed;
+        comment << " radius " << o.radius << " height " << o.height << " spacing " << o.spacing;
+        if (o.poseSeed != 0) comment << " pose seed " << o.poseSeed;
+        return msii::samples::makeCylinderSeal(o);
+    }
+    const msii::samples::VesselOptions v = vesselOptions(a);
+    comment << " profile " << a.profile << " height " << v.height << " radius " << v.radius << " spacing " << v.spacing;
+    if (v.poseSeed != 0) comment << " pose seed " << v.poseSeed;
+    if (a.shape == "vessel") return msii::samples::makeVessel(v);
+    msii::samples::SherdOptions o;
+    o.vessel = v;
+    if (a.optAngle->count()) o.angle = a.angle;
+    if (a.optFrom->count()) o.fromHeight = a.from;
+    if (a.optTo->count()) o.toHeight = a.to;
+    o.rim = a.rim;
+    comment << " angle " << o.angle << " from " << o.fromHeight;
+    if (o.rim) comment << " rim";
+    else comment << " to " << o.toHeight;
+    return msii::samples::makeSherd(o);
+}
+
+/// A number in JSON, as short as reads back exactly.
+std::string jsonNumber(double value)
+{
+    char text[32];
+    const auto end = std::to_chars(text, text + sizeof text, value).ptr;
+    return std::string(text, end);
+}
+
+std::string jsonVec3(const msii::Vec3& v)
+{
+    return "[" + jsonNumber(v.x) + ", " + jsonNumber(v.y) + ", " + jsonNumber(v.z) + "]";
+}
+
+std::string jsonPolyline(const std::vector<std::array<double, 2>>& line)
+{
+    std::string out = "[";
+    for (std::size_t i = 0; i < line.size(); ++i)
+        out += (i ? ", [" : "[") + jsonNumber(line[i][0]) + ", " + jsonNumber(line[i][1]) + "]";
+    return out + "]";
+}
+
+/// --truth: the known answers of a vessel, sherd or seal (docs/cli.md#msii-samples).
+std::string truthJson(const msii::samples::Vessel& v, const Arguments& a)
+{
+    std::ostringstream out;
+    out << "{\n  \"shape\": \"" << a.shape << "\",\n";
+    if (a.shape != "seal") out << "  \"profile\": \"" << a.profile << "\",\n";
+    out << "  \"units\": \"mm\",\n  \"seed\": " << a.seed << ",\n  \"pose_seed\": " << a.poseSeed << ",\n";
+    out << "  \"axis\": {\"point\": " << jsonVec3(v.axisPoint) << ", \"direction\": " << jsonVec3(v.axisDirection)
+        << "},\n";
+    out << "  \"rim_diameter\": " << (v.rimDiameter > 0 ? jsonNumber(v.rimDiameter) : "null") << ",\n";
+    out << "  \"height\": " << jsonNumber(v.height) << ",\n  \"marks\": [";
+    for (std::size_t k = 0; k < v.marks.size(); ++k) {
+        const msii::samples::VesselMark& m = v.marks[k];
+        out << (k ? ",\n    " : "\n    ") << "{\"theta\": " << jsonNumber(m.theta) << ", \"height\": "
+            << jsonNumber(m.height) << ", \"centre\": " << jsonVec3(m.centre) << ", \"normal\": " << jsonVec3(m.normal)
+            << ", \"radius\": " << jsonNumber(m.radius) << ", \"depth\": " << jsonNumber(m.depth) << "}";
+    }
+    out << (v.marks.empty() ? "],\n" : "\n  ],\n");
+    out << "  \"outer_profile\": " << jsonPolyline(v.outerProfile) << ",\n";
+    out << "  \"inner_profile\": " << jsonPolyline(v.innerProfile) << ",\n";
+    out << "  \"section\": " << jsonPolyline(v.section) << "\n}\n";
+    return out.str();
 }
 
 /// The options of a plane, terrain or tablet, said in @p comment.
@@ -366,6 +520,8 @@ void addHoles(msii::TriMesh& mesh, const Arguments& a, std::ostringstream& comme
                         : a.shape == "sphere" || a.shape == "cavity" ? msii::samples::SphereOptions{}.spacing
                         : a.shape == "cube"                          ? msii::samples::CubeOptions{}.spacing
                         : a.shape == "rounded-tablet" ? msii::samples::RoundedTabletOptions{}.spacing
+                        : a.shape == "vessel" || a.shape == "sherd" ? msii::samples::VesselOptions{}.spacing
+                        : a.shape == "seal"                          ? msii::samples::SealOptions{}.spacing
                                                                      : msii::samples::HeightFieldOptions{}.spacing;
     ho.maxSize = a.optHoleSize->count() ? a.holeSize : 2.0 * step;
     ho.minSize = 0.25 * ho.maxSize;
@@ -397,9 +553,14 @@ int generate(const Arguments& a)
 {
     checkUsage(a);
     msii::TriMesh mesh;
+    msii::samples::Vessel truth;  // vessel, sherd and seal: the known answers (mesh moved out)
+    const bool revolved = a.shape == "vessel" || a.shape == "sherd" || a.shape == "seal";
     std::ostringstream comment;
     comment << "msii-samples " << a.shape << " seed " << a.seed;
-    if (a.shape == "sphere" || a.shape == "cavity") {
+    if (revolved) {
+        truth = vesselObject(a, comment);
+        mesh = std::move(truth.mesh);
+    } else if (a.shape == "sphere" || a.shape == "cavity") {
         mesh = sphereMesh(a, comment);
     } else if (a.shape == "cube") {
         mesh = cubeMesh(a, comment);
@@ -415,9 +576,13 @@ int generate(const Arguments& a)
     if (a.optOffset->count()) {
         const msii::Vec3 offset = parseTriple(a.offsetText, "--offset");
         for (msii::Vec3& p : mesh.points) p += offset;
+        truth.axisPoint += offset;
+        for (msii::samples::VesselMark& m : truth.marks) m.centre += offset;
         comment << " offset " << a.offsetText;
     }
-    return writeMesh(mesh, a, comment.str());
+    const int code = writeMesh(mesh, a, comment.str());
+    if (code == 0 && revolved && !a.truth.empty()) msii::writeTextFileAtomic(a.truth, truthJson(truth, a));
+    return code;
 }
 
 } // namespace

@@ -713,9 +713,10 @@ TEST(SampleCli, ListsTheShapes)
     const RunResult r = runSamples("--list");
     EXPECT_EQ(r.code, 0);
     const std::string lines = "\n" + r.out;
-    for (const char* shape : {"sphere", "cavity", "cube", "plane", "terrain", "tablet", "rounded-tablet"})
+    for (const char* shape :
+         {"sphere", "cavity", "cube", "plane", "terrain", "tablet", "rounded-tablet", "vessel", "sherd", "seal"})
         EXPECT_NE(lines.find(std::string("\n") + shape + " "), std::string::npos) << shape;
-    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 7);
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 10);
 }
 
 TEST(SampleCli, HelpExitsZero)
