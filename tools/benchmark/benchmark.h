@@ -80,7 +80,7 @@ struct Settings {
     bool sheets = true;        ///< the sheets case: the fat cross beside one view, on the tablet and a closed tablet
     double sheetDpi = 600;     ///< the sheets case's scale
     bool vessels = true;       ///< the vessels case: msii axis, profile and unroll on a vase of ~1M vertices
-    double vesselSpacing = 0.17;  ///< its spacing, mm
+    double vesselSpacing = 0.245;  ///< its spacing, mm
     std::string before;        ///< an earlier msii program, run beside --msii on the scans case
     std::string gigamesh;      ///< a folder holding GigaMesh's gigamesh-featurevectors and -sl
     std::string markdown;

@@ -233,7 +233,7 @@ void addOptions(CLI::App& app, Settings& s)
     app.add_option("--vessels", s.vessels,
                    "also time msii axis, msii profile and msii unroll, each in its own process, on a generated vase "
                    "of about a million vertices (default true)");
-    app.add_option("--vessel-spacing", s.vesselSpacing, "the vase's vertex spacing, mm (default 0.17: about 1M vertices)");
+    app.add_option("--vessel-spacing", s.vesselSpacing, "the vase's vertex spacing, mm (default 0.245: about 1M vertices)");
     app.add_option("--before", s.before,
                    "with the scans: an earlier msii build's program (\"PROGRAM [ARGS...]\"), run in turn with --msii "
                    "on the same inputs, for before/after columns and their ratio")

@@ -61,7 +61,7 @@ Development developmentOf(const AxisOfRotation& axis, const UnrollOptions& o)
     return d;
 }
 
-/// Of the edges near the fitted surface (both ends within 5 % of the radius of it), the
+/// Of the edges near the fitted surface (both ends within 1 % of the radius of it, where the relief's own depth stretches lengths along the circle by at most 1 %), the
 /// largest and the 99th percentile of |unrolled length / length − 1|.
 void measureDistortion(const TriMesh& in, const TriMesh& out, double radius, Unrolled& u)
 {
@@ -71,7 +71,7 @@ void measureDistortion(const TriMesh& in, const TriMesh& out, double radius, Unr
             const std::uint32_t i = t[std::size_t(k)], j = t[std::size_t((k + 1) % 3)];
             if (i > j) continue;  // each inner edge once (its other triangle has it the other way)
             const Vec3 &a = out.points[i], &b = out.points[j];
-            if (std::abs(a.z) > 0.05 * radius || std::abs(b.z) > 0.05 * radius) continue;
+            if (std::abs(a.z) > 0.01 * radius || std::abs(b.z) > 0.01 * radius) continue;
             const std::uint32_t ia = i < in.numVertices() ? i : u.copyOf[i - in.numVertices()];
             const std::uint32_t ib = j < in.numVertices() ? j : u.copyOf[j - in.numVertices()];
             const double length = norm(in.points[ia] - in.points[ib]);

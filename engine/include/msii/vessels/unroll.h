@@ -40,7 +40,7 @@ struct Unrolled {
     double halfAngle = 0;  ///< the cone's, radians
     double seamAngle = 0;  ///< the seam's angle in the axis frame (AxisFrame::angle)
     Vec3 seamPoint;  ///< where the seam meets the fitted surface, at the object's mid-height
-    /// Length distortion over the fitted surface: of the edges with both ends within 5 % of
+    /// Length distortion over the fitted surface: of the edges with both ends within 1 % of
     /// the radius of it, the largest |unrolled length / length − 1| and its 99th percentile.
     double maxDistortion = 0, distortion99 = 0;
     std::size_t edgesMeasured = 0;
