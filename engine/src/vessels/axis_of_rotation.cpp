@@ -481,14 +481,27 @@ void refuseDegenerate(const std::vector<Sample>& triangles, const std::vector<Sa
                                 "through its centre is an axis of rotation of a sphere");
 }
 
-/// Keeps every k-th of @p samples, at most about @p most of them, their areas scaled up by k.
-void thin(std::vector<Sample>& samples, std::size_t most)
+/// Every k-th of the @p samples that @p keep, at most about @p most of them, their areas
+/// scaled up by k.
+template <class Keep>
+std::vector<Sample> thinned(const std::vector<Sample>& samples, std::size_t most, const Keep& keep)
 {
-    const std::size_t k = (samples.size() + most - 1) / most;
-    if (k <= 1) return;
-    std::size_t out = 0;
-    for (std::size_t i = 0; i < samples.size(); i += k) samples[out] = samples[i], samples[out++].area *= double(k);
-    samples.resize(out);
+    std::vector<std::size_t> kept;
+    for (std::size_t i = 0; i < samples.size(); ++i)
+        if (keep(i)) kept.push_back(i);
+    const std::size_t k = std::max<std::size_t>(1, (kept.size() + most - 1) / most);
+    std::vector<Sample> out;
+    out.reserve(kept.size() / k + 1);
+    for (std::size_t i = 0; i < kept.size(); i += k) {
+        out.push_back(samples[kept[i]]);
+        out.back().area *= double(k);
+    }
+    return out;
+}
+
+std::vector<Sample> thinned(const std::vector<Sample>& samples, std::size_t most)
+{
+    return thinned(samples, most, [](std::size_t) { return true; });
 }
 
 /// How well the normal lines meet one line along @p a: in the plane across a, the point c
@@ -541,14 +554,14 @@ std::vector<AxisFrame> searchDirections(const std::vector<Sample>& all, std::siz
         double misfit;
         Vec3 direction, point;
     };
-    std::vector<Found> grid;
     constexpr int kDirections = 1500;  // a Fibonacci lattice on the half sphere: about 3° apart
-    for (int i = 0; i < kDirections; ++i) {
+    std::vector<Found> grid(kDirections);
+    tbb::parallel_for(0, kDirections, [&](int i) {
         const double z = (i + 0.5) / kDirections, r = std::sqrt(1 - z * z), phi = i * 2.39996322972865332;
-        Found g{0, Vec3(r * std::cos(phi), r * std::sin(phi), z), {}};
+        Found& g = grid[std::size_t(i)];
+        g.direction = Vec3(r * std::cos(phi), r * std::sin(phi), z);
         g.misfit = normalLinesMisfit(v, g.direction, g.point);
-        grid.push_back(g);
-    }
+    });
     // The best directions at least 10° apart (the valleys of an ambiguous piece), each refined
     // on two finer grids around it.
     std::sort(grid.begin(), grid.end(), [](const Found& a, const Found& b) { return a.misfit < b.misfit; });
@@ -564,12 +577,15 @@ std::vector<AxisFrame> searchDirections(const std::vector<Sample>& all, std::siz
         for (const double spread : {0.06, 0.008}) {  // radians
             const AxisFrame f(Vec3{}, best.direction);
             const Vec3 centre = best.direction;
-            for (int i = -6; i <= 6; ++i)
-                for (int j = -6; j <= 6; ++j) {
-                    Found t{0, normalized(centre + f.e1 * (spread * i / 6) + f.e2 * (spread * j / 6)), {}};
-                    t.misfit = normalLinesMisfit(v, t.direction, t.point);
-                    if (t.misfit < best.misfit) best = t;
-                }
+            std::vector<Found> around(13 * 13);
+            tbb::parallel_for(0, 13 * 13, [&](int k) {
+                const int i = k / 13 - 6, j = k % 13 - 6;
+                Found& t = around[std::size_t(k)];
+                t.direction = normalized(centre + f.e1 * (spread * i / 6) + f.e2 * (spread * j / 6));
+                t.misfit = normalLinesMisfit(v, t.direction, t.point);
+            });
+            for (const Found& t : around)  // the first of the best, in the grid's order
+                if (t.misfit < best.misfit) best = t;
         }
         starts.emplace_back(best.point - best.direction * dot(best.point, best.direction), best.direction);
     }
@@ -831,14 +847,13 @@ std::vector<AxisFrame> startsOf(const std::vector<Sample>& allTriangles, const s
 {
     Vec3 point, direction;
     std::array<double, 3> eigen{};
-    std::vector<Sample> lines = allTriangles, sheetLines;
-    thin(lines, 100000);
-    fitNormalLines(lines, options.lineIterations, point, direction, eigen);
+    fitNormalLines(thinned(allTriangles, 100000), options.lineIterations, point, direction, eigen);
     std::vector<AxisFrame> starts{AxisFrame(point, direction)};
-    for (std::size_t t = 0; t < allTriangles.size(); ++t)
-        if (sheets.area[sheets.of[t]] >= 0.1 * sheets.total) sheetLines.push_back(allTriangles[t]);
-    thin(sheetLines, 100000);
-    if (sheetLines.size() > 100 && sheetLines.size() < allTriangles.size()) {
+    std::size_t onSheets = 0;
+    const auto onLargeSheet = [&](std::size_t t) { return sheets.area[sheets.of[t]] >= 0.1 * sheets.total; };
+    for (std::size_t t = 0; t < allTriangles.size(); ++t) onSheets += onLargeSheet(t) ? 1 : 0;
+    if (onSheets > 100 && onSheets < allTriangles.size()) {
+        const std::vector<Sample> sheetLines = thinned(allTriangles, 100000, onLargeSheet);
         fitNormalLines(sheetLines, options.lineIterations, point, direction, eigen);
         starts.emplace_back(point, direction);
     }
@@ -856,24 +871,31 @@ AxisFrame bestStart(const std::vector<AxisFrame>& starts, const std::vector<Samp
 {
     AxisFrame f = starts[0];
     double bestMisfit = 1e300;
-    const auto tryStart = [&](AxisFrame start, int iterations, double better) {
-        ProfileFit fit;
-        Profile profile;
-        refineOnProfile(start, few, binWidth(start, few, edge), iterations, fit, profile);
-        const double misfit = medianMisfit(fit);
-        if (!(misfit < better * bestMisfit)) return false;
-        bestMisfit = misfit, f = start;
-        return true;
+    // Each start refined on its own (in parallel), then taken in order: the first that fits
+    // better than the best so far by the factor @p better.
+    const auto tryStarts = [&](std::vector<AxisFrame> tried, int iterations, double better) {
+        std::vector<double> misfit(tried.size());
+        tbb::parallel_for(std::size_t(0), tried.size(), [&](std::size_t k) {
+            ProfileFit fit;
+            Profile profile;
+            refineOnProfile(tried[k], few, binWidth(tried[k], few, edge), iterations, fit, profile);
+            misfit[k] = medianMisfit(fit);
+        });
+        bool improved = false;
+        for (std::size_t k = 0; k < tried.size(); ++k)
+            if (misfit[k] < better * bestMisfit) bestMisfit = misfit[k], f = tried[k], improved = true;
+        return improved;
     };
-    for (const AxisFrame& start : starts) tryStart(start, options.profileIterations, 1.0);
+    tryStarts(starts, options.profileIterations, 1.0);
     for (const double tilt : {0.14, 0.07, 0.035, 0.0175})
         for (bool better = true; better;) {
-            better = false;
             const AxisFrame around = f;
+            std::vector<AxisFrame> tilted;
             for (int k = 0; k < 8; ++k) {
                 const Vec3 side = around.e1 * std::cos(k * kPi / 4) + around.e2 * std::sin(k * kPi / 4);
-                better = tryStart(AxisFrame(around.point, around.direction + side * tilt), 4, 0.98) || better;
+                tilted.emplace_back(around.point, around.direction + side * tilt);
             }
+            better = tryStarts(tilted, 4, 0.98);
         }
     return f;
 }
@@ -924,8 +946,8 @@ AxisOfRotation fitAxisOfRotation(const TriMesh& mesh, const AxisFitOptions& opti
     samplesOf(mesh, m.centroid, sheets, allTriangles, vertices);
     // Every k-th sample, at most about 100,000 of each: plenty for five parameters, and the
     // fit's time stays bounded on meshes of millions of vertices.
-    std::vector<Sample> triangles = allTriangles;
-    thin(triangles, 100000), thin(vertices, 100000);
+    const std::vector<Sample> triangles = thinned(allTriangles, 100000);
+    vertices = thinned(vertices, 100000);
     refuseDegenerate(triangles, vertices, m.area);
     const double edge = medianEdge(mesh);
 
