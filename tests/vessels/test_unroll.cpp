@@ -82,8 +82,11 @@ TEST(Unroll, AConesDevelopmentKeepsDistancesOnIt)
         const double r = 50 - 0.15 * z;
         return Vec3(r * std::cos(theta), r * std::sin(theta), z);
     };
-    points.points = {onCone(20, 0.5), onCone(80, 1.2), onCone(50, 2.0), onCone(30, 0.9)};
-    points.triangles = {{0, 1, 2}, {0, 2, 3}};
+    // Four far-apart points (every vertex is placed, in a triangle or not) and one small
+    // triangle, which a rollout needs.
+    points.points = {onCone(20, 0.5), onCone(80, 1.2), onCone(50, 2.0),
+                     onCone(30, 0.9), onCone(21, 0.5), onCone(20, 0.52)};
+    points.triangles = {{0, 4, 5}};
     const Unrolled d = unrollSurface(points, axis, cone);
     const double sinA = std::sin(u.halfAngle), apex = 50 / 0.15;
     for (int i = 0; i < 4; ++i)
@@ -97,4 +100,26 @@ TEST(Unroll, AConesDevelopmentKeepsDistancesOnIt)
             EXPECT_NEAR(d.mesh.points[i].z, 0, 1e-9);
         }
     EXPECT_THROW(unrollSurface(points, axisAlongZ(45), cone), InvalidInputError);  // no slope
+    points.triangles = {{0, 1, 2}};  // only a triangle spanning 86° about the axis: nothing to unroll
+    EXPECT_THROW(unrollSurface(points, axis, cone), InvalidInputError);
+}
+
+TEST(Unroll, TheSeamRunsThroughAPiecesOpenSide)
+{
+    // A sherd of 80° straddling the axis frame's angle 0: the default seam goes round to the
+    // open side and cuts nothing; a seam through the piece cuts it.
+    const AxisOfRotation axis = axisAlongZ(50);
+    const AxisFrame f(axis.point, axis.direction);
+    SherdOptions o;
+    o.vessel.shape = VesselShape::Cylinder;
+    o.vessel.spacing = 0.6;
+    o.angle = 80, o.fromHeight = 40, o.toHeight = 80;
+    o.theta0 = std::atan2(f.e1.y, f.e1.x) - 40 * kPi / 180;
+    const Vessel sherd = makeSherd(o);
+    const Unrolled u = unrollSurface(sherd.mesh, axis);
+    EXPECT_TRUE(u.copyOf.empty());
+    EXPECT_LT(std::cos(u.seamAngle), -0.5);  // across the axis from the piece
+    UnrollOptions through;
+    through.cutThrough = f.point + f.e1 * 50 + f.direction * 60;
+    EXPECT_FALSE(unrollSurface(sherd.mesh, axis, through).copyOf.empty());
 }

@@ -33,7 +33,7 @@ int runAxis(const AxisArgs& args)
     const AxisOfRotation a = axisFromOption(read.mesh, "auto", said);
     nlohmann::json record = axisRecord(a, units);
     record["input"] = args.input;
-    writeTextFileAtomic(output, record.dump(2) + "\n");
+    writeTextFileAtomic(output, record.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
     std::printf("axis: point %.6g %.6g %.6g, direction %.6f %.6f %.6f\n", a.point.x, a.point.y, a.point.z,
                 a.direction.x, a.direction.y, a.direction.z);
     std::printf("shape: %s; residual %.3g %s; mean radius %.4g %s; height %.4g %s\n", revolutionShapeName(a.shape),

@@ -90,8 +90,12 @@ int runUnroll(const UnrollArgs& args)
     po.comments.push_back(std::string("msii ") + versionString() + " unroll " +
                           (o.shape == UnrollShape::Cylinder ? "cylinder" : "cone") +
                           (o.impression ? " impression" : ""));
+    // The record's text first: nothing is written if it cannot be made.
+    const std::string record = unrollRecord(args, axis, u, in.mesh.numVertices())
+                                   .dump(2, ' ', false, nlohmann::json::error_handler_t::replace) +
+                               "\n";
     writePly(output, u.mesh, in.properties, po);
-    writeTextFileAtomic(json, unrollRecord(args, axis, u, in.mesh.numVertices()).dump(2) + "\n");
+    writeTextFileAtomic(json, record);
     if (!args.quiet)
         std::fprintf(stderr,
                      "msii: %s -> %s (%s, axis %s, seam %.1f degrees, %zu seam copies; length distortion up to %.2g "

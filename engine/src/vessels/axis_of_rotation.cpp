@@ -903,7 +903,11 @@ AxisFrame bestStart(const std::vector<AxisFrame>& starts, const std::vector<Samp
 /// The refusals of a fit that does not describe a surface of revolution.
 void refuseMisfit(const ProfileFit& fit, const AxisOfRotation& out, double area, const AxisFitOptions& options)
 {
-    if (!(fit.wallArea > 0.2 * area) || !(out.meanRadius > 0) || fit.inlierArea < 0.5 * fit.wallArea ||
+    if (!(fit.wallArea > 0.2 * area))
+        throw InvalidInputError("too little wall to fit an axis to: " + number(100 * fit.wallArea / area) +
+                                " % of the surface faces away from (or towards) the best axis, at least 20 % is "
+                                "needed (flat forms such as plates, dishes and lids are not handled)");
+    if (!(out.meanRadius > 0) || fit.inlierArea < 0.5 * fit.wallArea ||
         fit.rms > options.notRevolution * out.meanRadius)
         throw InvalidInputError("not a surface of revolution: its wall lies " + number(fit.rms) +
                                 " (RMS, in the mesh's units) from the best one, " +

@@ -96,7 +96,11 @@ Section planeSection(const TriMesh& mesh, const Vec3& point, const Vec3& normal)
 void writeProfileSvg(const std::string& path, const Section& s, const ProfileDrawingOptions& o)
 {
     const double k = o.scale, margin = 12.0, labels = 14.0;  // mm on paper
-    const double x0 = std::min(s.xMin, o.axisX.value_or(s.xMin)), x1 = std::max(s.xMax, o.axisX.value_or(s.xMax));
+    // The drawing's extent: the section, the axis, and the rim's dimension line across it (a
+    // rim sherd's section lies on one side of the axis; its rim diameter spans both).
+    const double reach = o.rimDiameter && o.axisX ? 0.5 * *o.rimDiameter : 0;
+    const double x0 = std::min(s.xMin, o.axisX ? *o.axisX - reach : s.xMin);
+    const double x1 = std::max(s.xMax, o.axisX ? *o.axisX + reach : s.xMax);
     const double width = std::max((x1 - x0) * k + 2 * margin, 80.0);
     const double height = (s.yMax - s.yMin) * k + 2 * margin + 2 * labels + (o.title.empty() ? 0 : 5);
     const auto X = [&](double x) { return margin + (x - x0) * k; };
@@ -130,7 +134,7 @@ void writeProfileSvg(const std::string& path, const Section& s, const ProfileDra
             << "font-size=\"3.5\" text-anchor=\"middle\">" << text << "</text>\n";
     }
     // The scale bar: a nice length near a fifth of the drawing, and the scale.
-    const double bar = scaleBarLength(int(std::lround((x1 - x0) * 100)), 0.01);
+    const double bar = scaleBarLength(1000, std::max({x1 - x0, s.yMax - s.yMin, 1e-12}) / 1000);
     const double yb = height - margin;
     std::snprintf(text, sizeof text, "%g %s; scale 1:%g", bar, o.units.c_str(), 1.0 / k);
     svg << "<g class=\"scale\"><rect x=\"" << margin << "\" y=\"" << yb - 1 << "\" width=\"" << bar * k

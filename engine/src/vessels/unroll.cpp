@@ -41,7 +41,43 @@ struct Development {
     }
 };
 
-Development developmentOf(const AxisOfRotation& axis, const UnrollOptions& o)
+/// The default seam: the middle of the widest span of angles around the axis where the
+/// surface has no vertex, if it spans at least 5° (a sherd, a partial scan: the seam then cuts
+/// nothing); else angle 0 (AxisFrame::e1). @p angle: each vertex's, NaN for those in no
+/// triangle or on the axis.
+double openSide(const std::vector<double>& angle)
+{
+    constexpr int kBins = 3600;  // a tenth of a degree
+    std::vector<char> filled(kBins, 0);
+    for (const double a : angle)
+        if (std::isfinite(a)) filled[std::size_t(std::clamp(int((a + kPi) / (2 * kPi) * kBins), 0, kBins - 1))] = 1;
+    int bestStart = 0, bestLength = 0;
+    for (int start = 0; start < kBins; ++start) {  // runs of empty bins, round the circle
+        if (filled[std::size_t(start)] || !filled[std::size_t((start + kBins - 1) % kBins)]) continue;
+        int length = 0;
+        while (length < kBins && !filled[std::size_t((start + length) % kBins)]) ++length;
+        if (length > bestLength) bestStart = start, bestLength = length;
+    }
+    if (bestLength < kBins / 72) return 0;
+    return (bestStart + 0.5 * bestLength) / kBins * 2 * kPi - kPi;
+}
+
+/// Each vertex's angle about the axis (AxisFrame::angle); NaN for vertices in no triangle
+/// or on the axis.
+std::vector<double> anglesOf(const TriMesh& mesh, const AxisFrame& frame)
+{
+    std::vector<char> used(mesh.numVertices(), 0);
+    for (const Triangle& t : mesh.triangles)
+        for (std::uint32_t i : t) used[i] = 1;
+    std::vector<double> angle(mesh.numVertices());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, angle.size()), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i)
+            angle[i] = used[i] && frame.radius(mesh.points[i]) > 0 ? frame.angle(mesh.points[i]) : std::nan("");
+    });
+    return angle;
+}
+
+Development developmentOf(const TriMesh& mesh, const AxisOfRotation& axis, const UnrollOptions& o)
 {
     Development d{AxisFrame(axis.point, axis.direction), o.shape};
     if (o.shape == UnrollShape::Cylinder) {
@@ -57,6 +93,8 @@ Development developmentOf(const AxisOfRotation& axis, const UnrollOptions& o)
     if (o.cutThrough) {
         if (!(d.frame.radius(*o.cutThrough) > 0)) throw InvalidInputError("the seam's point lies on the axis");
         d.seam = d.frame.angle(*o.cutThrough);
+    } else {
+        d.seam = openSide(anglesOf(mesh, d.frame));
     }
     return d;
 }
@@ -89,7 +127,7 @@ void measureDistortion(const TriMesh& in, const TriMesh& out, double radius, Unr
 
 Unrolled unrollSurface(const TriMesh& mesh, const AxisOfRotation& axis, const UnrollOptions& o)
 {
-    const Development d = developmentOf(axis, o);
+    const Development d = developmentOf(mesh, axis, o);
     Unrolled u;
     u.shape = o.shape, u.radius = d.radius, u.seamAngle = d.seam;
     u.apexHeight = d.apex, u.halfAngle = std::asin(d.sinA);
@@ -133,6 +171,9 @@ Unrolled unrollSurface(const TriMesh& mesh, const AxisOfRotation& axis, const Un
         }
         u.mesh.triangles.push_back(t);
     }
+    if (u.mesh.triangles.empty())
+        throw InvalidInputError("nothing to unroll: every triangle spans more than an eighth of a turn about the axis "
+                                "(a surface at the axis, or one of fewer than eight sides)");
     if (o.impression)
         for (Vec3& p : u.mesh.points) p.x = -p.x, p.z = -p.z;
     if (o.impression)  // mirrored: the triangles turn the other way

@@ -21,8 +21,10 @@ enum class UnrollShape { Cylinder, Cone };
 
 struct UnrollOptions {
     UnrollShape shape = UnrollShape::Cylinder;
-    /// The seam runs along the surface's line through this point (default: the line at the
-    /// axis frame's angle 0, AxisFrame::e1).
+    /// The seam runs along the surface's line through this point. Default: the middle of the
+    /// widest span of angles (at least 5°) where the surface has no vertex, so that a sherd or
+    /// a partial scan is not cut; where the surface goes all round, the line at the axis
+    /// frame's angle 0 (AxisFrame::e1).
     std::optional<Vec3> cutThrough;
     /// Lay out the impression instead: what the surface leaves when rolled over clay, the
     /// rollout mirrored left to right with its relief inverted.
@@ -46,8 +48,8 @@ struct Unrolled {
     std::size_t edgesMeasured = 0;
 };
 
-/// @throw InvalidInputError for a cone without slope (use a cylinder) or a seam point on the
-/// axis.
+/// @throw InvalidInputError for a cone without slope (use a cylinder), a seam point on the
+/// axis, or nothing left to unroll (every triangle at the axis).
 Unrolled unrollSurface(const TriMesh& mesh, const AxisOfRotation& axis, const UnrollOptions& options = {});
 
 }  // namespace msii
