@@ -114,8 +114,9 @@ TEST(SheetRaster, AClosedTabletShowsAllSidesAndAOneSidedScanOne)
         EXPECT_EQ(open.sides.scanned[std::size_t(k)], k == int(SheetView::Obverse)) << k;
     // Blank views see nothing on the sheet.
     for (std::size_t k = 0; k < open.pixels.hits.triangle.size(); ++k)
-        if (open.pixels.hits.triangle[k] != PixelHits::kNone)
+        if (open.pixels.hits.triangle[k] != PixelHits::kNone) {
             ASSERT_EQ(open.pixels.view[k], std::int8_t(SheetView::Obverse));
+        }
     // Told that its front is the other way, the scan is the reverse.
     SheetOrientationOptions back;
     back.front = Vec3(0, 0, -1);
