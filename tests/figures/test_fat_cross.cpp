@@ -49,17 +49,6 @@ int bottom(const SheetViewBox& b)
     return b.y0 + b.frame.height;
 }
 
-/// [column, row, depth] of @p p through the view's matrix.
-Vec3 project(const SheetViewBox& b, const Vec3& p)
-{
-    const ToPixel a = b.toPixel();
-    Vec3 r;
-    for (int i = 0; i < 3; ++i)
-        r[i] =
-            a[std::size_t(i)][0] * p.x + a[std::size_t(i)][1] * p.y + a[std::size_t(i)][2] * p.z + a[std::size_t(i)][3];
-    return r;
-}
-
 }  // namespace
 
 TEST(FatCross, ViewsHaveTheObjectsExtentsAndSitWhereTheyBelong)
@@ -118,7 +107,7 @@ TEST(FatCross, EachViewIsFoldedOutFromTheObverse)
     o.pixelSize = 0.1;
     const FatCrossLayout l = layoutFatCross(t.mesh, straight(t.mesh), o);
     const Vec3 c(0, 0, 0), dx(1, 0, 0), dy(0, 1, 0), dz(0, 0, 1);
-    const auto moves = [&](SheetView v, const Vec3& d) { return project(box(l, v), c + d) - project(box(l, v), c); };
+    const auto moves = [&](SheetView v, const Vec3& d) { return box(l, v).project(c + d) - box(l, v).project(c); };
     EXPECT_GT(moves(SheetView::Obverse, dx).x, 0);
     EXPECT_LT(moves(SheetView::Obverse, dy).y, 0);
     EXPECT_GT(moves(SheetView::Obverse, dz).z, 0);  // depth towards the viewer
@@ -133,7 +122,7 @@ TEST(FatCross, EachViewIsFoldedOutFromTheObverse)
     // The matrix agrees with the frame: pixel centres at frame.pixelX/Y + the
     // box's corner.
     for (const SheetViewBox& b : l.views) {
-        const Vec3 p(3.0, -7.0, 2.5), m = b.frame.toMap(p), q = project(b, p);
+        const Vec3 p(3.0, -7.0, 2.5), m = b.frame.toMap(p), q = b.project(p);
         EXPECT_NEAR(q.x, b.x0 + b.frame.pixelX(m.x), 1e-9);
         EXPECT_NEAR(q.y, b.y0 + b.frame.pixelY(m.y), 1e-9);
         EXPECT_NEAR(q.z, m.z, 1e-12);
@@ -150,7 +139,7 @@ TEST(FatCross, TheObjectFillsEachBoxToItsEdges)
         SCOPED_TRACE(sheetViewName(b.view));
         double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
         for (const Vec3& p : t.mesh.points) {
-            const Vec3 q = project(b, p);
+            const Vec3 q = b.project(p);
             x0 = std::min(x0, q.x), x1 = std::max(x1, q.x), y0 = std::min(y0, q.y), y1 = std::max(y1, q.y);
         }
         EXPECT_GE(x0, b.x0 - 1e-9);

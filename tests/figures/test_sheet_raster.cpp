@@ -48,16 +48,6 @@ SheetOrientationOptions straight()
     return given;
 }
 
-Vec3 project(const SheetViewBox& b, const Vec3& p)
-{
-    const ToPixel a = b.toPixel();
-    Vec3 r;
-    for (int i = 0; i < 3; ++i)
-        r[i] =
-            a[std::size_t(i)][0] * p.x + a[std::size_t(i)][1] * p.y + a[std::size_t(i)][2] * p.z + a[std::size_t(i)][3];
-    return r;
-}
-
 /// The view of each tablet side under the straight orientation (sides and views
 /// share their order: obverse, reverse, top, bottom, left, right).
 SheetView viewOf(TabletSide side)
@@ -79,7 +69,7 @@ TEST(SheetRaster, EveryMarkIsSeenInItsSidesViewAtItsFloor)
     for (const TabletMark& m : t.marks) {
         SCOPED_TRACE(tabletSideName(m.side));
         const SheetViewBox& b = s.layout.views[std::size_t(viewOf(m.side))];
-        const Vec3 q = project(b, m.centre);
+        const Vec3 q = b.project(m.centre);
         ASSERT_GE(q.x, b.x0);
         ASSERT_LT(q.x, b.x0 + b.frame.width);
         ASSERT_GE(q.y, b.y0);

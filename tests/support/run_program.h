@@ -17,6 +17,12 @@ struct RunResult {
     std::string out, err;
 };
 
+/// @p path in single quotes, for an argument list as written in a shell.
+inline std::string quoted(const std::filesystem::path& path)
+{
+    return "'" + path.string() + "'";
+}
+
 /// Runs `'program' args` (args as written in a shell), with its output captured in files of
 /// @p folder that are removed afterwards (names unique per process and call, so tests may run
 /// in parallel).

@@ -40,6 +40,7 @@ namespace fs = std::filesystem;
 using namespace msii;
 using msii::test::readFile;
 using msii::test::RunResult;
+using msii::test::quoted;
 using msii::test::runProgram;
 using msii::test::writeFile;
 
@@ -51,8 +52,6 @@ const fs::path& tempDir()
     static const msii::test::TempDir dir;
     return dir.path();
 }
-
-std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
 
 RunResult run(const std::string& exe, const std::string& args) { return runProgram(exe, args, tempDir()); }
 

@@ -27,6 +27,7 @@
 namespace fs = std::filesystem;
 using namespace msii;
 using msii::test::readFile;
+using msii::test::quoted;
 using msii::test::runProgram;
 using msii::test::RunResult;
 
@@ -40,10 +41,6 @@ const fs::path& tempDir()
     return dir.path();
 }
 
-std::string quoted(const fs::path& p)
-{
-    return "'" + p.string() + "'";
-}
 RunResult runMsii(const std::string& args)
 {
     return runProgram(MSII_EXE, args, tempDir());

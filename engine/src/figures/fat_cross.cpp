@@ -150,6 +150,17 @@ ToPixel SheetViewBox::toPixel() const
              {n.x, n.y, n.z, -dot(n, o)}}};
 }
 
+Vec3 SheetViewBox::project(const Vec3& p) const
+{
+    const ToPixel a = toPixel();
+    Vec3 r;
+    for (int i = 0; i < 3; ++i) {
+        const auto& row = a[std::size_t(i)];
+        r[i] = row[0] * p.x + row[1] * p.y + row[2] * p.z + row[3];
+    }
+    return r;
+}
+
 FatCrossLayout layoutFatCross(const TriMesh& mesh, const SheetOrientation& orientation, const FatCrossOptions& options)
 {
     if (mesh.empty()) throw InvalidInputError("the mesh is empty: nothing to lay out");

@@ -67,6 +67,8 @@ struct SheetViewBox {
         ///< figures/sheet_raster.h)
     int captionX = 0, captionY = 0;  ///< the caption's top centre (when captioned)
     ToPixel toPixel() const;
+    /// [column, row, depth] of @p p (the input's coordinates) through toPixel().
+    Vec3 project(const Vec3& p) const;
 };
 
 struct FatCrossLayout {
