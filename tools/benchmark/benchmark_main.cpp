@@ -100,26 +100,31 @@ const char* speedLimits()
 What limits the speed now, and the next steps:
 - **P and L's exact sums** (the check's flagged pairs, evaluated from the triangles) are the
   largest stage on the slabs, and with the kernel sums they take most of the time of all four
-  invariants on every scan (tables above). The walk opens only the cells along the
-  flagged spheres and classifies their triangles in runs of up to 64 at once, by their
-  corners, so a pair costs about the triangles its sphere crosses: on the Stanford bunny
-  (R = 17 median edges) a flagged vertex tests about 1,490 triangles for 780 clips, and the
-  stage is 62 % classifying the runs, 21 % clipping and 17 % walking the blocks and cells
-  (perf, one thread). The cost follows the share of values flagged (under each scan's
-  table) more than the mesh's size. Radii fitted on the coarser
-  sample level are flagged about twice as often as on the finest (the bunny: 25–28 % against
-  13–16 %); moving them to the finest level flags fewer, but its kernel sums cost more than
-  that saves (`msii compute --invariants P,L -j 1`, one run each: the bunny 6.7 s against
-  6.1 s, the 39k slab 5.4 s against 4.7 s).
-  On the tablet, 73 % of the pairs evaluated exactly are at the smallest radius checked
-  (4 median edges), where 78 % of the vertices are flagged, yet 99 % of those pairs had
-  kernel values within the stated bounds already (every 97th vertex away from the rim,
-  `computePatchLine` with `keepCheck` against `computeExact`): at the smallest radii the
-  narrow kernel's own noise on the finest level is about the size of the thresholds. A
-  check that allows for that noise would spare a third of the tablet's exact sums, but it
-  lets pairs beyond the stated bounds through where events and noise add (the Stanford
-  bunny, rough thin sheets), so the check stays ([method.md](method.md#exact-where-the-kernels-blur)).
-  Next: kernels that err less on the coarser levels, so that fewer pairs are flagged.
+  invariants on every scan (tables above). The walk opens only the blocks and cells along the
+  flagged spheres, adds the others whole, and clips only the triangles a flagged sphere
+  cuts, so it already visits about the shell of a kernel's width around each sphere, not
+  the ball: on the Stanford bunny at R = 27 median edges (one thread), a flagged pair's ball
+  holds 2,796 triangles on average, the walk tests 659 of them and clips 259; the stage is
+  about 55 % testing triangles, 25 % clipping and 20 % walking the blocks and cells (perf),
+  and it is bound by computation, not memory (a vertex walked twice takes twice as long).
+  Each pair therefore costs about its sphere's circumference in triangles, and the total
+  follows the number of pairs flagged: 27 % of the bunny's pairs at R = 27 median edges,
+  where all four invariants take 2.08 times 7764c7f's time (`farm-bench`, medians of 5, one
+  thread), against 1.4–1.5 times on the slabs (10–11 % flagged). Neither cells of 1, 3 or 4
+  median edges instead of 2, nor the triangle tests compiled for AVX2, nor the clips' corners
+  stored per triangle changed the stage's time beyond this machine's noise. On the 39k slab,
+  81 % of the vertices are flagged at the smallest radius checked (3.1 median edges) and 25 %
+  at the next, where under 1 % of the flagged pairs had kernel values beyond the stated
+  bounds, yet those small balls cost 45 % of the stage: cells of two median edges hold up to
+  45 triangles where the vertices are densest, and a small ball tests about as many
+  triangles as it holds. At larger radii, 25–35 % of the bunny's flagged pairs are beyond
+  the bounds and 50–60 % beyond half of them, so those flags are mostly needed. A check that
+  allows for the narrow kernels' noise (thresholds raised by half of its median at
+  6 cells, falling as (6 h_0/r)²) spares a fifth of the slab's exact sums but leaves 4 pairs
+  beyond the bounds unflagged (1 with today's check, L̂ off by 0.015), so the check stays
+  ([method.md](method.md#exact-where-the-kernels-blur)).
+  Next: a correction that clips only where the kernels err along the sphere (near the
+  event), not the whole circle; and cells sized by the local triangle density.
 - **P and L's kernel sums**: per vertex, the histograms of the samples within reach, over
   distance (binning 26 %, adding into the histograms 50 % of the stage, callgrind on the 39k
   slab). Neither the continuation's vertices (past open borders) nor samples that no
