@@ -336,6 +336,18 @@ msii::TriMesh roundedTabletMesh(const Arguments& a, std::ostringstream& comment)
     return std::move(tablet.mesh);
 }
 
+/// What vessels, sherds and seals share on the command line: their marks (where given), the
+/// spacing, the scanner noise and the seeds of the mesh and of its pose.
+template <class Options> void applyMarksAndSampling(const Arguments& a, Options& o)
+{
+    if (a.optMarkRadius->count()) o.markRadius = a.markRadius;
+    if (a.optMarkDepth->count()) o.markDepth = a.markDepth;
+    if (a.optSpacing->count()) o.spacing = a.spacing;
+    o.roughness = a.roughness;
+    o.seed = a.seed;
+    o.poseSeed = a.poseSeed;
+}
+
 /// The vessel of the command line (for a vessel and a sherd).
 msii::samples::VesselOptions vesselOptions(const Arguments& a)
 {
@@ -349,12 +361,7 @@ msii::samples::VesselOptions vesselOptions(const Arguments& a)
     if (a.optTopRadius->count()) o.topRadius = a.topRadius;
     if (a.optWall->count()) o.wall = a.wall;
     if (a.optBase->count()) o.base = a.base;
-    if (a.optMarkRadius->count()) o.markRadius = a.markRadius;
-    if (a.optMarkDepth->count()) o.markDepth = a.markDepth;
-    if (a.optSpacing->count()) o.spacing = a.spacing;
-    o.roughness = a.roughness;
-    o.seed = a.seed;
-    o.poseSeed = a.poseSeed;
+    applyMarksAndSampling(a, o);
     return o;
 }
 
@@ -365,12 +372,7 @@ msii::samples::Vessel vesselObject(const Arguments& a, std::ostringstream& comme
         msii::samples::SealOptions o;
         if (a.optRadius->count()) o.radius = a.radius;
         if (a.optHeight->count()) o.height = a.height;
-        if (a.optMarkRadius->count()) o.markRadius = a.markRadius;
-        if (a.optMarkDepth->count()) o.markDepth = a.markDepth;
-        if (a.optSpacing->count()) o.spacing = a.spacing;
-        o.roughness = a.roughness;
-        o.seed = a.seed;
-        o.poseSeed = a.poseSeed;
+        applyMarksAndSampling(a, o);
         comment << " radius " << o.radius << " height " << o.height << " spacing " << o.spacing;
         if (o.poseSeed != 0) comment << " pose seed " << o.poseSeed;
         return msii::samples::makeCylinderSeal(o);

@@ -364,13 +364,19 @@ double bisect(const std::function<double(double)>& f, double lo, double hi)
     return 0.5 * (lo + hi);
 }
 
-/// The options that make the mesh rather than the shape (vesselOuterRadius ignores them).
-void validateSampling(const VesselOptions& o)
+/// The marks, spacing and noise of a vessel's or a seal's options.
+template <class Options> void validateMarksAndSampling(const Options& o)
 {
     requirePositive(o.markRadius, "mark radius");
     requireNonNegative(o.markDepth, "mark depth");
     requirePositive(o.spacing, "spacing");
     requireNonNegative(o.roughness, "roughness");
+}
+
+/// The options that make the mesh rather than the shape (vesselOuterRadius ignores them).
+void validateSampling(const VesselOptions& o)
+{
+    validateMarksAndSampling(o);
     if (!(o.markDepth < o.wall / 2))
         throw InvalidInputError("sample mesh: the marks must be shallower than half the wall.");
     if (!(o.spacing <= o.wall / 2))
@@ -497,10 +503,7 @@ Profile sealProfile(const SealOptions& o)
 {
     requirePositive(o.radius, "radius");
     requirePositive(o.height, "height");
-    requirePositive(o.markRadius, "mark radius");
-    requireNonNegative(o.markDepth, "mark depth");
-    requirePositive(o.spacing, "spacing");
-    requireNonNegative(o.roughness, "roughness");
+    validateMarksAndSampling(o);
     if (!(o.markDepth < o.radius / 4))
         throw InvalidInputError("sample mesh: the marks must be shallower than a quarter of the radius.");
     const double edge = kSealRounding * o.radius;

@@ -221,6 +221,20 @@ Motion motionBetween(const TriMesh& before, const TriMesh& after)
             frame(after.points[a], after.points[b], after.points[c]), before.points[a], after.points[a]};
 }
 
+/// The motion from @p built to @p posed, expected to carry every vertex and the truth's axis
+/// (the z axis through the origin) to the posed ones.
+Motion expectOneRigidMotion(const Vessel& built, const Vessel& posed)
+{
+    const Motion m = motionBetween(built.mesh, posed.mesh);
+    double worst = 0;
+    for (std::size_t i = 0; i < built.mesh.numVertices(); ++i)
+        worst = std::max(worst, norm(m(built.mesh.points[i]) - posed.mesh.points[i]));
+    EXPECT_LT(worst, 1e-9);
+    EXPECT_LT(norm(posed.axisPoint - m(Vec3(0, 0, 0))), 1e-9);
+    EXPECT_LT(norm(posed.axisDirection - m.rotate(Vec3(0, 0, 1))), 1e-12);
+    return m;
+}
+
 /// A mark's deepest surface point within its radius, as the signed distance along its
 /// normal from its centre (negative: below), and the distance of the vertex nearest to its
 /// axis.
@@ -511,14 +525,8 @@ TEST(Vessel, PoseIsOneRigidMotionAndTheTruthFollowsIt)
     const Vessel posed = makeVessel(o);
     ASSERT_EQ(posed.mesh.numVertices(), built.mesh.numVertices());
     EXPECT_TRUE(posed.mesh.triangles == built.mesh.triangles);
-    const Motion m = motionBetween(built.mesh, posed.mesh);
-    double worst = 0;
-    for (std::size_t i = 0; i < built.mesh.numVertices(); ++i)
-        worst = std::max(worst, norm(m(built.mesh.points[i]) - posed.mesh.points[i]));
-    EXPECT_LT(worst, 1e-9);
     // The truth's axis is the posed z axis through the posed origin; the marks moved along.
-    EXPECT_LT(norm(posed.axisPoint - m(Vec3(0, 0, 0))), 1e-9);
-    EXPECT_LT(norm(posed.axisDirection - m.rotate(Vec3(0, 0, 1))), 1e-12);
+    const Motion m = expectOneRigidMotion(built, posed);
     EXPECT_NEAR(norm(posed.axisDirection), 1.0, 1e-12);
     EXPECT_LE(norm(posed.axisPoint), 1000.0);
     EXPECT_GT(norm(posed.axisPoint), 1.0);
@@ -704,13 +712,7 @@ TEST(VesselSherd, PoseIsOneRigidMotion)
     const Vessel built = makeSherd(o);
     o.vessel.poseSeed = 11;
     const Vessel posed = makeSherd(o);
-    const Motion m = motionBetween(built.mesh, posed.mesh);
-    double worst = 0;
-    for (std::size_t i = 0; i < built.mesh.numVertices(); ++i)
-        worst = std::max(worst, norm(m(built.mesh.points[i]) - posed.mesh.points[i]));
-    EXPECT_LT(worst, 1e-9);
-    EXPECT_LT(norm(posed.axisPoint - m(Vec3(0, 0, 0))), 1e-9);
-    EXPECT_LT(norm(posed.axisDirection - m.rotate(Vec3(0, 0, 1))), 1e-12);
+    expectOneRigidMotion(built, posed);
     EXPECT_EQ(posed.height, built.height);
 }
 
