@@ -81,25 +81,38 @@ public:
         return k;
     }
 
-    /// For @p m items with nearest and farthest squared distances @p near2[j] <= @p far2[j]:
-    /// first[j] = firstAbove(near2[j]) and last[j] = firstAtLeast(far2[j]), as counts of the
-    /// radii² below. Every item counts the radii at or below the smallest near2, and none at
-    /// or beyond the largest far2, so that only the few radii between are compared (loops
-    /// that vectorise). Returns those bounds, {firstAbove(min near2), firstAtLeast(max far2)}.
+    /// For @p m items (at most kMaxItems) with nearest and farthest squared distances
+    /// @p near2[j] <= @p far2[j]: first[j] = firstAbove(near2[j]) and last[j] =
+    /// firstAtLeast(far2[j]), as counts of the radii² below. Every item counts the radii at or
+    /// below the smallest near2, and none at or beyond the largest far2, so that only the few
+    /// radii between are compared (loops that vectorise). Returns those bounds, {firstAbove(min near2), firstAtLeast(max far2)}.
     std::pair<std::size_t, std::size_t> count(std::size_t m, const double* near2, const double* far2,
                                               std::int32_t* first, std::int32_t* last) const
     {
-        double lowest = INFINITY, highest = 0;  // (m >= 1)
-        for (std::size_t j = 0; j < m; ++j) lowest = std::min(lowest, near2[j]), highest = std::max(highest, far2[j]);
+        // The extremes in four lanes (a minimum is exact in any order) and the counts in
+        // doubles, converted at the end: loops that vectorise, where a single running minimum
+        // and counts in integers compared from doubles do not.
+        double low[4] = {INFINITY, INFINITY, INFINITY, INFINITY}, high[4] = {0, 0, 0, 0};
+        std::size_t j = 0;
+        for (; j + 4 <= m; j += 4)
+            for (std::size_t l = 0; l < 4; ++l) {
+                low[l] = near2[j + l] < low[l] ? near2[j + l] : low[l];
+                high[l] = far2[j + l] > high[l] ? far2[j + l] : high[l];
+            }
+        for (; j < m; ++j) low[0] = std::min(low[0], near2[j]), high[0] = std::max(high[0], far2[j]);
+        const double lowest = std::min(std::min(low[0], low[1]), std::min(low[2], low[3]));
+        const double highest = std::max(std::max(high[0], high[1]), std::max(high[2], high[3]));
         const std::size_t below = firstAbove(lowest), upTo = firstAtLeast(highest);
-        for (std::size_t j = 0; j < m; ++j) first[j] = std::int32_t(below), last[j] = std::int32_t(below);
+        double countFirst[kMaxItems], countLast[kMaxItems];
+        for (j = 0; j < m; ++j) countFirst[j] = double(below), countLast[j] = double(below);
         for (std::size_t k = below; k < upTo; ++k) {
             const double r2 = mSquared[k];
-            for (std::size_t j = 0; j < m; ++j) {
-                first[j] += r2 <= near2[j] ? 1 : 0;
-                last[j] += r2 < far2[j] ? 1 : 0;
+            for (j = 0; j < m; ++j) {
+                countFirst[j] += r2 <= near2[j] ? 1.0 : 0.0;
+                countLast[j] += r2 < far2[j] ? 1.0 : 0.0;
             }
         }
+        for (j = 0; j < m; ++j) first[j] = std::int32_t(countFirst[j]), last[j] = std::int32_t(countLast[j]);
         return {below, upTo};
     }
 
@@ -126,6 +139,9 @@ public:
             if (!line.empty()) line[j][i] = float(double(mArc[k]) / mArcUnits / (2 * kPi * r));
         }
     }
+
+    /// The most items count() takes at once.
+    static constexpr std::size_t kMaxItems = 64;
 
 private:
     static constexpr double kMaxBuckets = 4096;
@@ -583,8 +599,8 @@ public:
     }
 
 private:
-    static constexpr std::size_t kChunk = 64;
-    static constexpr std::size_t kCellsPerBlock = 64;
+    static constexpr std::size_t kChunk = FlaggedSums::kMaxItems;
+    static constexpr std::size_t kCellsPerBlock = FlaggedSums::kMaxItems;  // 4 × 4 × 4
     static constexpr double kBeyond = std::numeric_limits<double>::max();
 
     /// The cells of @p block: each either settled (beyond reach, or whole inside from one
