@@ -134,7 +134,8 @@ What limits the speed now, and the next steps:
   the thresholds, and so the bounds the check keeps, twice as loose the stage takes 2.10 s,
   four times as loose 0.99 s (1.27 times). At today's bounds no check brings such scans to
   1.3 times: the exact sums per pair, or the kernels' own errors near a sphere's tangencies
-  and creases, must fall first. On the tablet the check's other cost is in the kernel sums
+  and creases, must fall first. Without the check (`--pl-check off`) the bunny takes 0.88
+  times 7764c7f's time (`farm-bench`, medians of 5, one thread). On the tablet the check's other cost is in the kernel sums
   (14.0 s against 9.7 s with `--pl-check off`, two threads): the fitted vertices whose fit
   bends beyond the check's thresholds are evaluated where they are (402k vertex-levels
   against 48k), which halves the pairs flagged there. A DEM with `--bands quality,P,L`
