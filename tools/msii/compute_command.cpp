@@ -528,8 +528,7 @@ void addPrecisionOptions(CLI::App* cmd, ComputeArgs& args)
                     "on (default): P and L are also summed with kernels 1.5 times narrower, and where the two "
                     "disagree (a sphere meeting a thin part, a fold or a crease) evaluated exactly from the "
                     "triangles, so that the values are within the bounds of docs/accuracy.md (which says where "
-                    "they are not); off: the kernel "
-                    "sums alone, faster on scans with many thin parts")
+                    "they are not); off: the kernel sums alone, faster on scans with many thin parts")
         ->check(CLI::IsMember({"on", "off"}));
 }
 

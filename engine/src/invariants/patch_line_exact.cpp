@@ -85,7 +85,8 @@ public:
     /// @p near2[j] <= @p far2[j]: first[j] = firstAbove(near2[j]) and last[j] =
     /// firstAtLeast(far2[j]), as counts of the radii² below. Every item counts the radii at or
     /// below the smallest near2, and none at or beyond the largest far2, so that only the few
-    /// radii between are compared (loops that vectorise). Returns those bounds, {firstAbove(min near2), firstAtLeast(max far2)}.
+    /// radii between are compared (loops that vectorise). Returns those bounds,
+    /// {firstAbove(min near2), firstAtLeast(max far2)}.
     std::pair<std::size_t, std::size_t> count(std::size_t m, const double* near2, const double* far2,
                                               std::int32_t* first, std::int32_t* last) const
     {
