@@ -109,13 +109,13 @@ What limits the speed now, and the next steps:
   and it is bound by computation, not memory (a vertex walked twice takes twice as long).
   Each pair therefore costs about its sphere's circumference in triangles (the clips are
   the sphere's own cuts: 2 % of them find nothing), and the total follows the number of pairs
-  flagged: 27 % of the bunny's pairs at R = 27 median edges, where all four invariants take
-  2.08 times 7764c7f's time (`farm-bench`, medians of 5, one thread), against 1.4–1.5 times
-  on the slabs (10–11 % flagged) and 1.2 times on the tablet (7 %). Counting the flagged
-  radii per triangle in loops that vectorise made the stage 4 % faster (values
-  bit-identical); cells of 1, 3 or 4 median edges instead of 2, the tests compiled for AVX2
-  through run-time dispatch (slower: the calls cost more than the wider lanes gain), the
-  clips' corners stored per triangle, or the whole areas summed per radius did not. On the
+  flagged: 27 % of the Stanford bunny's pairs at R = 27 median edges, against 10–11 % on the
+  slabs, where all four invariants take 1.40 times 7764c7f's time, and 7 % on the tablet
+  (1.22 times; tables above). Counting the flagged radii per triangle in loops that
+  vectorise helped a little (values bit-identical); cells of 1, 3 or 4 median edges instead
+  of 2, the tests compiled for AVX2 through run-time dispatch (slower: the calls cost more
+  than the wider lanes gain), the clips' corners stored per triangle, or the whole areas
+  summed per radius did not help. On the
   39k slab, 81 % of the vertices are flagged at the smallest radius checked (3.1 median
   edges) and 25 % at the next, where under 1 % of the flagged pairs had kernel values beyond
   the stated bounds, yet those small balls cost 45 % of the stage: cells of two median edges
@@ -125,22 +125,14 @@ What limits the speed now, and the next steps:
   check that allows for the narrow kernels' noise (thresholds raised by half of its median
   at 6 cells, falling as (6 h_0/r)²) spares a fifth of the slab's exact sums but leaves 4
   pairs beyond the bounds unflagged (1 with today's check, L̂ off by 0.015), so the check
-  stays ([method.md](method.md#exact-where-the-kernels-blur)).
-  How far a better check could go, on the bunny at R = 27 median edges (the stage alone,
-  one thread, in one process): summing exactly only the pairs whose kernel values are
-  beyond the stated bounds (known from the exact values: 23.5 % of today's flagged pairs)
-  would take 1.15 s instead of 3.43 s, so all four invariants would still take about 1.33
-  times 7764c7f's time; the pairs beyond half the bounds (44 %), 2.0 s and 1.64 times. With
-  the thresholds, and so the bounds the check keeps, twice as loose the stage takes 2.10 s,
-  four times as loose 0.99 s (1.27 times). At today's bounds no check brings such scans to
-  1.3 times: the exact sums per pair, or the kernels' own errors near a sphere's tangencies
-  and creases, must fall first. Without the check (`--pl-check off`) the bunny takes 0.88
-  times 7764c7f's time (`farm-bench`, medians of 5, one thread). On the tablet the check's other cost is in the kernel sums
-  (14.0 s against 9.7 s with `--pl-check off`, two threads): the fitted vertices whose fit
-  bends beyond the check's thresholds are evaluated where they are (402k vertex-levels
-  against 48k), which halves the pairs flagged there. A DEM with `--bands quality,P,L`
-  (1000 × 1000 cells of 0.5 m, R = 15 cells, two threads) takes 1.04 times 7764c7f's time
-  (`farm-bench`, medians of 3) and 1671 MiB at its peak against 1768.
+  stays ([method.md](method.md#exact-where-the-kernels-blur)). Even a check that knew the
+  errors would send a quarter of today's flagged pairs on the bunny (23.5 %, those beyond
+  the bounds) to the exact sums, so the exact sums per pair, or the kernels' own errors near
+  a sphere's tangencies and creases, must fall before scans like it cost little more than
+  the kernels. On the tablet the check's other cost is in the kernel sums (13.26 s against
+  10.10 s, table above): the fitted vertices whose fit bends beyond the check's thresholds
+  are evaluated where they are (about eight times as many as without the check), which
+  halves the pairs flagged there.
   Next: clips that share a triangle's frame over its flagged radii, and kernels that err
   less where a sphere becomes tangent to a sheet or meets a crease.
 - **P and L's kernel sums**: per vertex, the histograms of the samples within reach, over
